@@ -1,0 +1,1 @@
+"""Scene side of rtaccel: mesh loading, procedural scenes, default cameras."""
