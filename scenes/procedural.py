@@ -6,7 +6,8 @@
 Names:
   cornell  closed Cornell-style room (walls/floor/ceiling as 5x5 grids with shared vertices) and two
            axis-aligned boxes inside, each face a 2x2 grid; 396 triangles. Not random: the seed is ignored.
-  hairball 200 random curves inside the unit sphere, each a thin 3-sided tube of 16 segments; 19,200 triangles.
+  hairball 400 random curves inside the unit sphere, each a thin (radius 0.006) 3-sided tube of 8 segments of
+           length 0.12; 19,200 triangles.
   soup     2,000 random triangles of random size (log-uniform 0.01..0.4) and orientation in [-1,1]^3.
   extreme  closed room [-50,50]^3 holding needles, zero-area triangles (collinear and repeated vertices),
            huge and tiny triangles, and vertex stars (fans sharing one vertex) near the origin.
@@ -98,13 +99,13 @@ def cornell(rng):
     return b.arrays()
 
 
-def hairball(rng, strands=200, segments=16, sides=3, radius=0.004):
+def hairball(rng, strands=400, segments=8, sides=3, radius=0.006):
     pts = np.empty((strands, segments + 1, 3))
     p = rng.normal(size=(strands, 3))
     p *= (rng.random((strands, 1)) ** (1 / 3) * 0.9 / np.linalg.norm(p, axis=1, keepdims=True))
     d = rng.normal(size=(strands, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    step = 0.08
+    step = 0.12
     for i in range(segments + 1):
         pts[:, i] = p
         d = d + 0.5 * rng.normal(size=(strands, 3))
