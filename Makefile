@@ -1,0 +1,122 @@
+# rtaccel — every entry point. `make run` and `make test` install what they need on a fresh machine.
+SHELL := /bin/bash
+.DEFAULT_GOAL := help
+
+ROOT      := $(abspath .)
+PY        := $(ROOT)/.venv/bin/python
+SBT       := $(ROOT)/tools/sbt
+CP_FILE   := build/classpath.txt
+VERSION   := $(shell git describe --always --dirty 2>/dev/null || echo unknown)
+JAVA       = java -Xss64m -Xmx8g -Drtaccel.version=$(VERSION) -cp "$$(cat $(CP_FILE))"
+export PYTHONPATH := $(ROOT)
+
+# User variables (documented in README.md).
+SCENE   ?= build/scenes/cornell.obj
+CONFIG  ?= fit
+M       ?= 4
+MPPL    ?= 4
+WIDTH   ?= 64
+HEIGHT  ?= 48
+DEPTH   ?= 5
+SEED    ?= 1
+SHARED_SCENES ?= $(abspath ../shared/scenes)
+MODEL_ARGS = --config $(CONFIG) --m $(M) --mppl $(MPPL)
+TRIS       = $$(tools/tris $(SCENE))
+
+SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
+
+.PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace check analyze bench clean
+
+help:
+	@echo "make run | test | golden | trace | check | analyze | bench   (see README.md)"
+
+# ---------------------------------------------------------------- installation
+deps: venv verilator $(CP_FILE)
+
+venv: .venv/.stamp
+.venv/.stamp: requirements.txt
+	@echo "[deps] python venv (.venv) from requirements.txt"
+	python3 -m venv .venv
+	.venv/bin/pip install -q --disable-pip-version-check -r requirements.txt
+	touch $@
+
+verilator:
+	@command -v verilator >/dev/null || { echo "[deps] installing verilator from apt"; \
+	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq verilator >/dev/null; }
+	@verilator --version
+
+# Compiles the Scala side and records its runtime classpath so entry points start as plain `java`.
+$(CP_FILE): $(SCALA_SRC)
+	@mkdir -p build
+	@echo "[deps] compiling Scala (sbt launcher from Maven Central on first use)"
+	$(SBT) compile "export Runtime/fullClasspath" | tee build/sbt-export.log | grep -E '^\[(error|warn)' || true
+	@tail -n 1 build/sbt-export.log | grep -q '^/' || { echo "error: Scala compile failed; see build/sbt-export.log" >&2; exit 1; }
+	tail -n 1 build/sbt-export.log > $@
+
+build/scenes/%.obj: | venv
+	@mkdir -p build/scenes
+	$(PY) -m scenes.procedural $* $@
+
+# ---------------------------------------------------------------- main job
+run: deps build/scenes/cornell.obj
+	@$(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=build/run/golden
+	@$(MAKE) --no-print-directory check SCENE=$(SCENE) GOLDEN=build/run/golden | tee build/run/check.log
+	@$(MAKE) --no-print-directory analyze SCENE=$(SCENE) GOLDEN=build/run/golden OUT=build/run/analysis | tee build/run/analyze.log
+	@$(PY) -m dse.run_summary build/run
+
+# ---------------------------------------------------------------- user commands
+golden: venv
+	@test -n "$(OUT)" || { echo "error: give OUT=<dir> for the golden trace" >&2; exit 2; }
+	$(PY) -m golden.export --scene $(SCENE) --out $(OUT) --width $(WIDTH) --height $(HEIGHT) --depth $(DEPTH) --seed $(SEED)
+
+trace: deps
+	@test -n "$(RAYS)" || { echo "error: give RAYS=<rays.npy>" >&2; exit 2; }
+	@test -n "$(OUT)" || { echo "error: give OUT=<dir>" >&2; exit 2; }
+	@T=$(TRIS) && $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $(RAYS) --out $(OUT) $(MODEL_ARGS)
+
+check: deps
+	@test -n "$(GOLDEN)" || { echo "error: give GOLDEN=<dir made by make golden>" >&2; exit 2; }
+	@T=$(TRIS) && O=$$(mktemp -d build/check.XXXXXX) && trap "rm -rf $$O" EXIT && \
+	  $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $(GOLDEN)/rays.npy --out $$O --access-trace 0 $(MODEL_ARGS) >/dev/null && \
+	  $(PY) -m golden.check --tris "$$T" --golden $(GOLDEN) --hits $$O/hits.npy
+
+analyze: deps
+	@OUT=$${OUT:-build/analyze/$$(basename $(SCENE))}; G=$(GOLDEN); \
+	  if [ -z "$$G" ]; then G=$$OUT/golden; $(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=$$G >&2 || exit $$?; fi; \
+	  T=$(TRIS) && $(JAVA) rtaccel.cli.Analyze --tris "$$T" --scene-label $(SCENE) --rays $$G/rays.npy --out $$OUT $(MODEL_ARGS) && \
+	  $(PY) -m dse.plot_analysis $$OUT >&2 && echo "[analyze] CSV and PNG in $$OUT" >&2
+
+BENCH_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
+bench: deps
+	@for s in $(BENCH_SCENES); do \
+	  [ -f "$$s" ] || { echo "[bench] skip $$s (absent)"; continue; }; \
+	  n=$$(basename $$s .obj); G=build/bench/$$n/golden; \
+	  [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=128 HEIGHT=96 >/dev/null || exit $$?; \
+	  T=$$(tools/tris $$s); \
+	  $(JAVA) rtaccel.cli.Bench --tris "$$T" --scene-label $$s --rays $$G/rays.npy $(MODEL_ARGS) > build/bench/$$n/model.json || exit $$?; \
+	  $(PY) -m golden.bench --scene $$s --rays $$G/rays.npy > build/bench/$$n/embree.json || exit $$?; \
+	  $(PY) -m dse.bench_table $$n build/bench/$$n/model.json build/bench/$$n/embree.json; \
+	done
+
+# ---------------------------------------------------------------- tests
+FIXTURE_SCENES := cornell hairball soup extreme
+FIXTURES := build/fixtures/.stamp
+fixtures: $(FIXTURES)
+$(FIXTURES): $(wildcard scenes/*.py golden/*.py) | venv
+	@echo "[test] procedural scenes and golden traces in build/fixtures"
+	@set -e; for s in $(FIXTURE_SCENES); do d=build/fixtures/$$s; mkdir -p $$d; \
+	  $(PY) -m scenes.procedural $$s $$d/scene.obj; \
+	  $(PY) -m scenes.export $$d/scene.obj $$d/tris.npy; \
+	  $(PY) -m golden.export --scene $$d/scene.obj --out $$d/golden --width 32 --height 24 --depth 3 --seed 7 >/dev/null; done
+	touch $@
+
+test: deps fixtures
+	@rm -rf build/test-reports; mkdir -p build/test-reports/python
+	@rc=0; \
+	RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=1; \
+	RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
+	  $(PY) -m pytest -q --junitxml=build/test-reports/python/pytest.xml || rc=1; \
+	$(PY) tools/count_tests.py build/test-reports; exit $$rc
+
+clean:
+	rm -rf build target project/target

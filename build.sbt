@@ -1,0 +1,26 @@
+// One Scala project: reference model, BVH builder, config and (later) the Chisel generators.
+// Versions are the stack verified to resolve from Maven Central (see docs/toolchain.md).
+ThisBuild / scalaVersion := "2.13.15"
+ThisBuild / version      := "0.1.0"
+ThisBuild / organization := "rtaccel"
+
+val chiselVersion = "6.7.0"
+
+lazy val root = (project in file("."))
+  .settings(
+    name := "rtaccel",
+    libraryDependencies ++= Seq(
+      "org.chipsalliance" %% "chisel"     % chiselVersion,
+      "edu.berkeley.cs"   %% "chiseltest" % "6.0.0" % Test,
+      "org.scalatest"     %% "scalatest"  % "3.2.19" % Test,
+      "com.lihaoyi"       %% "ujson"      % "3.1.0"
+    ),
+    addCompilerPlugin("org.chipsalliance" % "chisel-plugin" % chiselVersion cross CrossVersion.full),
+    scalacOptions ++= Seq("-language:reflectiveCalls", "-deprecation", "-feature", "-Xcheckinit", "-Ymacro-annotations"),
+    // Tests share the 2-core machine with Verilator builds; keep them in one forked JVM with a big stack.
+    Test / fork := true,
+    Test / javaOptions ++= Seq("-Xss16m", "-Xmx6g"),
+    Test / testOptions += Tests.Argument(TestFrameworks.ScalaTest, "-oD", "-u", "build/test-reports/scala"),
+    Compile / run / fork := true,
+    Compile / run / javaOptions ++= Seq("-Xss16m", "-Xmx8g")
+  )

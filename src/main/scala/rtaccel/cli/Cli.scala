@@ -1,0 +1,71 @@
+package rtaccel.cli
+
+import java.nio.file.{Path, Paths}
+import rtaccel.config.{Fit, PlatformParams, Presets}
+import rtaccel.bvh.Mbvh
+import rtaccel.io.{InputError, Npy}
+import rtaccel.scene.Scene
+
+/** Shared plumbing of the command-line entry points the Makefile calls. */
+object Cli {
+  val version: String = sys.props.getOrElse("rtaccel.version", "0.1.0")
+
+  /** Runs a command body; user errors become one `error:` line and exit status 2. */
+  def run(args: Array[String])(body: Args => Unit): Unit = {
+    val code =
+      try { body(Args.parse(args)); 0 }
+      catch {
+        case e: InputError => System.err.println(s"error: ${e.getMessage}"); 2
+        case e: IllegalArgumentException => System.err.println(s"error: ${e.getMessage.stripPrefix("requirement failed: ")}"); 2
+      }
+    System.out.flush()
+    if (code != 0) sys.exit(code)
+  }
+
+  /** CONFIG=<preset> uses the preset's fixed widths and refuses scenes that exceed them; CONFIG=fit (default)
+    * starts from paper2017 and fits field widths and stack depth to the scene. M/MPPL/TUS override either.
+    */
+  def params(a: Args): PlatformParams = {
+    val cfg = a.get("config", "fit")
+    val base = if (cfg == "fit") Presets.paper2017 else Presets.byName(cfg)
+    base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus))
+  }
+
+  final case class Built(scene: Scene, params: PlatformParams, bvh: Mbvh, buildSeconds: Double)
+
+  def build(scene: Scene, p0: PlatformParams, fit: Boolean): Built = {
+    val t0 = System.nanoTime()
+    val bvh = Mbvh.build(scene, p0)
+    val secs = (System.nanoTime() - t0) / 1e9
+    val p = if (fit) Fit.fitTo(p0, bvh) else { Fit.check(p0, bvh, scene.name); p0 }
+    Built(scene, p, bvh, secs)
+  }
+
+  def loadAndBuild(a: Args): Built = {
+    val scene = Scene.load(a.path("tris"))
+    build(scene, params(a), a.get("config", "fit") == "fit")
+  }
+
+  def writeText(path: Path, text: String): Unit = Npy.atomicWrite(path, text.getBytes("UTF-8"))
+
+  def provenance(b: Built, sceneLabel: String): String =
+    s"# scene=$sceneLabel triangles=${b.scene.triangles} config=${b.params.name} M=${b.params.m} MPPL=${b.params.mppl} rtaccel=$version\n"
+}
+
+/** `--key value` arguments; every value a command reads is validated where it is read. */
+final case class Args(kv: Map[String, String]) {
+  def get(k: String, default: String): String = kv.getOrElse(k, default)
+  def opt(k: String): Option[String] = kv.get(k).filter(_.nonEmpty)
+  def need(k: String): String = opt(k).getOrElse(throw new InputError(s"missing --$k"))
+  def path(k: String): Path = Paths.get(need(k))
+  def int(k: String, default: Int): Int = opt(k).map(v => v.toIntOption.getOrElse(
+    throw new InputError(s"--$k must be an integer (got '$v')"))).getOrElse(default)
+}
+
+object Args {
+  def parse(a: Array[String]): Args = {
+    if (a.length % 2 != 0 || a.grouped(2).exists(p => !p(0).startsWith("--")))
+      throw new InputError(s"arguments must be --key value pairs (got ${a.mkString(" ")})")
+    Args(a.grouped(2).map(p => p(0).stripPrefix("--") -> p(1)).toMap)
+  }
+}

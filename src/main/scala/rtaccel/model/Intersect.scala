@@ -1,0 +1,53 @@
+package rtaccel.model
+
+import Fp32._
+
+/** A ray prepared for the intersection unit: origin, direction and the reciprocal direction computed
+  * once per ray (1/±0 = ±inf, so axis-parallel rays need no special case).
+  */
+final class PreparedRay(val ox: Float, val oy: Float, val oz: Float, val dx: Float, val dy: Float, val dz: Float,
+                        val tmin: Float, val tmax: Float) {
+  val ix: Float = 1f / dx; val iy: Float = 1f / dy; val iz: Float = 1f / dz
+}
+
+/** Ray-box slab test. Per axis t0=(min-o)*inv, t1=(max-o)*inv, lo/hi by NaN-propagating min/max; then
+  * tnear = max(max(max(tmin, lo.x), lo.y), lo.z) and tfar = min(min(min(tmax, hi.x), hi.y), hi.z) with NaN
+  * ignored, so a ray lying in a slab plane (0*inf) is unconstrained on that axis instead of leaking NaN.
+  * Hit iff tnear <= tfar; the entry distance tnear orders the children.
+  */
+object RayBox {
+  /** Returns tnear on a hit, NaN on a miss. */
+  def test(r: PreparedRay, tmax: Float, mnx: Float, mny: Float, mnz: Float, mxx: Float, mxy: Float, mxz: Float): Float = {
+    val t0x = (mnx - r.ox) * r.ix; val t1x = (mxx - r.ox) * r.ix
+    val t0y = (mny - r.oy) * r.iy; val t1y = (mxy - r.oy) * r.iy
+    val t0z = (mnz - r.oz) * r.iz; val t1z = (mxz - r.oz) * r.iz
+    val tnear = maxNum(maxNum(maxNum(r.tmin, minProp(t0x, t1x)), minProp(t0y, t1y)), minProp(t0z, t1z))
+    val tfar = minNum(minNum(minNum(tmax, maxProp(t0x, t1x)), maxProp(t0y, t1y)), maxProp(t0z, t1z))
+    if (tnear <= tfar) tnear else Float.NaN
+  }
+}
+
+/** Möller–Trumbore (as in the paper), in this order:
+  *   e1=v1-v0, e2=v2-v0, p=d x e2, det=e1.p, inv=1/det, s=o-v0, u=(s.p)*inv, q=s x e1, v=(d.q)*inv, t=(e2.q)*inv
+  * Hit iff det != 0, u >= 0, v >= 0, u+v <= 1, tmin <= t < tmax; every comparison is false on NaN, so an
+  * overflowed or degenerate triangle is a miss, never a bogus hit.
+  */
+object RayTriangle {
+  final class Result { var t = 0f; var u = 0f; var v = 0f }
+
+  def test(r: PreparedRay, tmax: Float, c: Int => Float, out: Result): Boolean = {
+    val e1x = c(3) - c(0); val e1y = c(4) - c(1); val e1z = c(5) - c(2)
+    val e2x = c(6) - c(0); val e2y = c(7) - c(1); val e2z = c(8) - c(2)
+    val px = crossX(r.dy, r.dz, e2y, e2z); val py = crossY(r.dx, r.dz, e2x, e2z); val pz = crossZ(r.dx, r.dy, e2x, e2y)
+    val det = dot(e1x, e1y, e1z, px, py, pz)
+    val inv = 1f / det
+    val sx = r.ox - c(0); val sy = r.oy - c(1); val sz = r.oz - c(2)
+    val u = dot(sx, sy, sz, px, py, pz) * inv
+    val qx = crossX(sy, sz, e1y, e1z); val qy = crossY(sx, sz, e1x, e1z); val qz = crossZ(sx, sy, e1x, e1y)
+    val v = dot(r.dx, r.dy, r.dz, qx, qy, qz) * inv
+    val t = dot(e2x, e2y, e2z, qx, qy, qz) * inv
+    val hit = det != 0f && u >= 0f && v >= 0f && u + v <= 1f && t >= r.tmin && t < tmax
+    if (hit) { out.t = t; out.u = u; out.v = v }
+    hit
+  }
+}

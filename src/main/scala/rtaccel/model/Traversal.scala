@@ -1,0 +1,102 @@
+package rtaccel.model
+
+import rtaccel.bvh.MemoryImage
+import rtaccel.scene.{Hits, Rays}
+
+/** Per-ray counters a traversal unit would keep. */
+final class RayStats {
+  var nodeFetches = 0L; var leafFetches = 0L; var primTests = 0L; var boxTests = 0L
+  var maxStack = 0; var overflows = 0
+}
+
+/** Reference traversal of one TU over the packed memory image (paper Section 2), defining the order the
+  * hardware must follow bit for bit:
+  *  - start with the root (node 0) as the current reference;
+  *  - node: fetch it, slab-test every non-empty child against [tmin, tmax] (tmax = closest hit so far),
+  *    sort hit children by entry distance (stable by slot), make the nearest current and push the others
+  *    far-first so the nearer ones pop first;
+  *  - leaf: fetch its primitives and test them in slot order; a hit with t < tmax becomes the closest hit
+  *    (ties keep the earlier one);
+  *  - pop: discard an entry whose entry distance exceeds tmax; done when the stack is empty.
+  * A push beyond params.stackDepth marks the ray as overflowed (the model carries on so the result stays
+  * usable for analysis; hardware reports the overflow).
+  */
+final class Traversal(img: MemoryImage) {
+  private val p = img.p
+  private val m = p.m
+  private val codec = img.codec
+  private var sRef = new Array[Int](64); private var sT = new Array[Float](64); private var sLvl = new Array[Int](64)
+  private val cRef = new Array[Int](m); private val cT = new Array[Float](m)
+  private val tri = new RayTriangle.Result
+  private var slot = 0
+  private val coord: Int => Float = k => img.primCoord(slot, k)
+
+  def traceAll(rays: Rays, sink: AccessSink = AccessSink.none, stats: RayStats = new RayStats): Hits = {
+    val h = Hits.empty(rays.count)
+    for (i <- 0 until rays.count) trace(i, rays, h, sink, stats)
+    h
+  }
+
+  def trace(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
+    val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
+    var tmax = r.tmax
+    var bestPrim = -1; var bestU = 0f; var bestV = 0f
+    var sp = 0
+    var overflowed = false
+    var cur = 0; var curLevel = 0; var hasCur = true // root node: ref 0 means node id 0
+    while (hasCur) {
+      if (!codec.isPrim(cur)) {
+        val id = codec.nodeId(cur)
+        sink.node(i, id, curLevel); st.nodeFetches += 1
+        var k = 0; var j = 0
+        while (j < m) {
+          val ref = img.childRef(id, j)
+          if (!codec.isEmpty(ref)) {
+            st.boxTests += 1
+            val tn = RayBox.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
+            if (!tn.isNaN) {
+              // insertion by entry distance, stable: equal distances keep slot order
+              var pos = k
+              while (pos > 0 && cT(pos - 1) > tn) { cRef(pos) = cRef(pos - 1); cT(pos) = cT(pos - 1); pos -= 1 }
+              cRef(pos) = ref; cT(pos) = tn; k += 1
+            }
+          }
+          j += 1
+        }
+        var q = k - 1
+        while (q >= 1) {
+          if (sp == sRef.length) grow()
+          sRef(sp) = cRef(q); sT(sp) = cT(q); sLvl(sp) = curLevel + 1; sp += 1; q -= 1
+        }
+        if (sp > st.maxStack) st.maxStack = sp
+        if (sp > p.stackDepth) overflowed = true
+        if (k > 0) { cur = cRef(0); curLevel += 1 } else hasCur = false
+      } else {
+        val first = codec.firstPrim(cur); val n = codec.count(cur)
+        sink.leaf(i, first, n, curLevel); st.leafFetches += 1
+        var s = first
+        while (s < first + n) {
+          slot = s; st.primTests += 1
+          if (RayTriangle.test(r, tmax, coord, tri)) {
+            tmax = tri.t; bestPrim = img.primId(s); bestU = tri.u; bestV = tri.v
+          }
+          s += 1
+        }
+        hasCur = false
+      }
+      while (!hasCur && sp > 0) {
+        sp -= 1
+        if (!(sT(sp) > tmax)) { cur = sRef(sp); curLevel = sLvl(sp); hasCur = true }
+      }
+    }
+    if (overflowed) st.overflows += 1
+    if (bestPrim >= 0) { out.t(i) = tmax; out.prim(i) = bestPrim; out.u(i) = bestU; out.v(i) = bestV }
+  }
+
+  @inline private def box(id: Int, j: Int, q: Int): Float = java.lang.Float.intBitsToFloat(img.childWord(id, j, q))
+
+  private def grow(): Unit = {
+    sRef = java.util.Arrays.copyOf(sRef, sRef.length * 2); sT = java.util.Arrays.copyOf(sT, sT.length * 2)
+    sLvl = java.util.Arrays.copyOf(sLvl, sLvl.length * 2)
+  }
+}
