@@ -1,14 +1,12 @@
 package rtaccel.cli
 
 import rtaccel.model.Analysis
-import rtaccel.scene.{Rays, Scene}
 
 /** make analyze: bandwidth vs MPPL (Fig 4) and accesses by level (Figs 5-6) as CSV in OUT. */
 object Analyze {
   def main(args: Array[String]): Unit = Cli.run(args) { a =>
     val out = a.path("out")
-    val scene = Scene.load(a.path("tris"))
-    val rays = Rays.load(a.path("rays"))
+    val (scene, rays, _) = Cli.inputs(a)
     val base = Cli.params(a)
     val mppls = a.get("mppls", "1,2,4,8,16").split(",").map(_.trim.toInt).toSeq
     val label = a.get("scene-label", a.need("tris"))

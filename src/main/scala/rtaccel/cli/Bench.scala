@@ -2,15 +2,13 @@ package rtaccel.cli
 
 import rtaccel.bvh.{MemoryImage, Mbvh}
 import rtaccel.model.Traversal
-import rtaccel.scene.{Rays, Scene}
 
 /** make bench (model side): BVH build time and single-thread reference-model rays/s, medians of repeats. */
 object Bench {
   private def median(xs: Seq[Double]): Double = { val s = xs.sorted; s(s.length / 2) }
 
   def main(args: Array[String]): Unit = Cli.run(args) { a =>
-    val scene = Scene.load(a.path("tris"))
-    val rays = Rays.load(a.path("rays"))
+    val (scene, rays, _) = Cli.inputs(a)
     val p = Cli.params(a)
     val repeat = a.int("repeat", 5)
     val builds = (0 until repeat).map { _ =>

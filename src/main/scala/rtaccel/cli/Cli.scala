@@ -4,21 +4,24 @@ import java.nio.file.{Path, Paths}
 import rtaccel.config.{Fit, PlatformParams, Presets}
 import rtaccel.bvh.Mbvh
 import rtaccel.io.{InputError, Npy}
-import rtaccel.scene.Scene
+import rtaccel.scene.{Normalize, Rays, Scene}
 
 /** Shared plumbing of the command-line entry points the Makefile calls. */
 object Cli {
   val version: String = sys.props.getOrElse("rtaccel.version", "0.1.0")
 
-  /** Runs a command body; user errors become one `error:` line and exit status 2. */
+  /** Runs a command body; user errors become one `error:` line and status 2 (returned for tests). */
+  def status(args: Array[String])(body: Args => Unit): Int =
+    try { body(Args.parse(args)); 0 }
+    catch {
+      case e: InputError => System.err.println(s"error: ${e.getMessage}"); 2
+      case e: IllegalArgumentException => System.err.println(s"error: ${e.getMessage.stripPrefix("requirement failed: ")}"); 2
+    }
+    finally System.out.flush()
+
+  /** `main` of an entry point: exits with the status when it is not 0. */
   def run(args: Array[String])(body: Args => Unit): Unit = {
-    val code =
-      try { body(Args.parse(args)); 0 }
-      catch {
-        case e: InputError => System.err.println(s"error: ${e.getMessage}"); 2
-        case e: IllegalArgumentException => System.err.println(s"error: ${e.getMessage.stripPrefix("requirement failed: ")}"); 2
-      }
-    System.out.flush()
+    val code = status(args)(body)
     if (code != 0) sys.exit(code)
   }
 
@@ -28,7 +31,9 @@ object Cli {
   def params(a: Args): PlatformParams = {
     val cfg = a.get("config", "fit")
     val base = if (cfg == "fit") Presets.paper2017 else Presets.byName(cfg)
-    base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus))
+    base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus),
+      nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
+      primAccessBytes = a.int("prim-bytes", base.primAccessBytes))
   }
 
   final case class Built(scene: Scene, params: PlatformParams, bvh: Mbvh, buildSeconds: Double)
@@ -41,9 +46,14 @@ object Cli {
     Built(scene, p, bvh, secs)
   }
 
-  def loadAndBuild(a: Args): Built = {
-    val scene = Scene.load(a.path("tris"))
-    build(scene, params(a), a.get("config", "fit") == "fit")
+  def fitRequested(a: Args): Boolean = a.get("config", "fit") == "fit"
+
+  /** The scene and rays as the host driver uploads them: scaled by one power of two (see Normalize). */
+  def inputs(a: Args): (Scene, Rays, Int) = {
+    val raw = Scene.load(a.path("tris"))
+    val rays = Rays.load(a.path("rays"))
+    val e = Normalize.exponent(raw)
+    (Normalize.scene(raw, e), Normalize.rays(rays, e), e)
   }
 
   def writeText(path: Path, text: String): Unit = Npy.atomicWrite(path, text.getBytes("UTF-8"))

@@ -3,14 +3,13 @@ package rtaccel.cli
 import rtaccel.bvh.MemoryImage
 import rtaccel.io.Npy
 import rtaccel.model.{AccessRecorder, RayStats, Traversal}
-import rtaccel.scene.Rays
 
 /** make trace: the reference model on a rays file -> OUT/hits.npy, OUT/trace.npy, OUT/summary.json. */
 object Trace {
   def main(args: Array[String]): Unit = Cli.run(args) { a =>
     val out = a.path("out")
-    val b = Cli.loadAndBuild(a)
-    val rays = Rays.load(a.path("rays"))
+    val (scene, rays, scaleExp) = Cli.inputs(a)
+    val b = Cli.build(scene, Cli.params(a), Cli.fitRequested(a))
     val img = MemoryImage.pack(b.bvh, b.scene, b.params)
     val rec = new AccessRecorder; val st = new RayStats
     val t0 = System.nanoTime()
@@ -24,7 +23,7 @@ object Trace {
       "leaves" -> b.bvh.numLeaves, "node_levels" -> (b.bvh.maxLevel + 1), "stack_bound" -> b.bvh.stackBound,
       "ref_fields" -> ujson.Obj("node_id_bits" -> p.refs.nodeIdBits, "prim_index_bits" -> p.refs.primIndexBits,
         "count_bits" -> p.refs.countBits, "level_bits" -> p.refs.levelBits, "ref_bits" -> p.refs.refBits),
-      "stack_depth" -> p.stackDepth, "rays" -> rays.count, "hits" -> hits.prim.count(_ >= 0),
+      "stack_depth" -> p.stackDepth, "normalize_exponent" -> scaleExp, "rays" -> rays.count, "hits" -> hits.prim.count(_ >= 0),
       "node_fetches" -> st.nodeFetches.toDouble, "leaf_fetches" -> st.leafFetches.toDouble, "prim_tests" -> st.primTests.toDouble,
       "node_bytes_per_ray" -> st.nodeFetches * p.nodeAccessBytes / n,
       "prim_bytes_per_ray" -> st.primTests * p.primAccessBytes / n,

@@ -40,7 +40,7 @@ final case class PlatformParams(
   mppl: Int = 4,
   stackDepth: Int = 64,
   clockMhz: Double = 150.0,
-  nodeAccessBytes: Int = 128,
+  nodeAccessBytesOverride: Int = 0,
   primAccessBytes: Int = 64,
   refs: RefFormat = RefFormat(nodeIdBits = 31, primIndexBits = 27, countBits = 4, levelBits = 0),
   nodeCache: CacheParams = CacheParams(),
@@ -65,7 +65,9 @@ final case class PlatformParams(
   /** A primitive is 9 floats (288 bits); its 64-byte slot also carries the original triangle id. */
   val primBits: Int = 9 * 32
   val primStrideBytes: Int = 64
-  require(nodeAccessBytes >= nodeBits / 8, s"node access of $nodeAccessBytes B is smaller than a node (${nodeBits / 8} B)")
+  /** Bytes one node fetch moves (paper: 128 B for QBVH); defaults to the node's stored size. */
+  val nodeAccessBytes: Int = if (nodeAccessBytesOverride > 0) nodeAccessBytesOverride else nodeStrideBytes
+  require(nodeAccessBytes >= nodeBits / 8, s"node access of $nodeAccessBytes B is smaller than a node (${nodeBits / 8} B); raise the node access size")
   val cyclesPerSecond: Double = clockMhz * 1e6
   val memBytesPerCycle: Double = memory.bytesPerSecond * memory.sustainedEfficiency / cyclesPerSecond
 }

@@ -1,0 +1,47 @@
+package rtaccel
+
+import java.nio.file.{Files, Path, Paths}
+import scala.util.Random
+import rtaccel.scene.{Rays, Scene}
+
+/** Scenes and rays for unit tests: random soups made here, procedural fixtures made by `make fixtures`
+  * (Python, scenes/procedural.py) under $RTACCEL_FIXTURES.
+  */
+object TestScenes {
+  def soup(seed: Long, n: Int, size: Float = 1f): Scene = {
+    val r = new Random(seed)
+    val c = new Array[Float](9 * n)
+    for (t <- 0 until n) {
+      val cx = r.nextFloat() * 10; val cy = r.nextFloat() * 10; val cz = r.nextFloat() * 10
+      for (v <- 0 until 3) {
+        c(9 * t + 3 * v) = cx + (r.nextFloat() - 0.5f) * size
+        c(9 * t + 3 * v + 1) = cy + (r.nextFloat() - 0.5f) * size
+        c(9 * t + 3 * v + 2) = cz + (r.nextFloat() - 0.5f) * size
+      }
+    }
+    Scene(s"soup$seed", c)
+  }
+
+  /** Random rays from points around the soup's cube towards random points inside it. */
+  def rays(seed: Long, n: Int, lo: Float = -2f, hi: Float = 12f): Rays = {
+    val r = new Random(seed)
+    def p() = lo + r.nextFloat() * (hi - lo)
+    val d = new Array[Float](8 * n)
+    for (i <- 0 until n) {
+      val o = Array(p(), p(), p()); val tgt = Array(p(), p(), p())
+      for (k <- 0 until 3) { d(8 * i + k) = o(k); d(8 * i + 3 + k) = tgt(k) - o(k) }
+      d(8 * i + 6) = 0f; d(8 * i + 7) = Float.PositiveInfinity
+    }
+    Rays(d)
+  }
+
+  val fixtureRoot: Option[Path] = sys.env.get("RTACCEL_FIXTURES").map(Paths.get(_)).filter(Files.isDirectory(_))
+  val fixtureNames: Seq[String] = Seq("cornell", "hairball", "soup", "extreme")
+
+  /** (name, scene, golden rays) for every procedural fixture that exists. */
+  def fixtures: Seq[(String, Scene, Rays)] = fixtureRoot.toSeq.flatMap { root =>
+    fixtureNames.map(n => root.resolve(n)).filter(d => Files.exists(d.resolve("tris.npy"))).map { d =>
+      (d.getFileName.toString, Scene.load(d.resolve("tris.npy")), Rays.load(d.resolve("golden/rays.npy")))
+    }
+  }
+}
