@@ -14,8 +14,8 @@ object Cli {
   def status(args: Array[String])(body: Args => Unit): Int =
     try { body(Args.parse(args)); 0 }
     catch {
-      case e: InputError => System.err.println(s"error: ${e.getMessage}"); 2
-      case e: IllegalArgumentException => System.err.println(s"error: ${e.getMessage.stripPrefix("requirement failed: ")}"); 2
+      case e: InputError => Console.err.println(s"error: ${e.getMessage}"); 2
+      case e: IllegalArgumentException => Console.err.println(s"error: ${e.getMessage.stripPrefix("requirement failed: ")}"); 2
     }
     finally System.out.flush()
 
@@ -33,7 +33,8 @@ object Cli {
     val base = if (cfg == "fit") Presets.paper2017 else Presets.byName(cfg)
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
-      primAccessBytes = a.int("prim-bytes", base.primAccessBytes))
+      primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
+      stackDepth = a.int("stack-depth", base.stackDepth))
   }
 
   final case class Built(scene: Scene, params: PlatformParams, bvh: Mbvh, buildSeconds: Double)

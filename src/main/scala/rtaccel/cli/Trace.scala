@@ -6,7 +6,9 @@ import rtaccel.model.{AccessRecorder, RayStats, Traversal}
 
 /** make trace: the reference model on a rays file -> OUT/hits.npy, OUT/trace.npy, OUT/summary.json. */
 object Trace {
-  def main(args: Array[String]): Unit = Cli.run(args) { a =>
+  def main(args: Array[String]): Unit = Cli.run(args)(main0)
+
+  def main0(a: Args): Unit = {
     val out = a.path("out")
     val (scene, rays, scaleExp) = Cli.inputs(a)
     val b = Cli.build(scene, Cli.params(a), Cli.fitRequested(a))
