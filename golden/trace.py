@@ -87,6 +87,17 @@ def trace_scene(scene, rays: np.ndarray, batch: int = DEFAULT_BATCH) -> np.ndarr
     return hits
 
 
+def occluded(scene, origins, dirs, tfar) -> np.ndarray:
+    """Boolean per ray: does anything lie on o + t d for 0 <= t <= tfar (Embree occlusion query)?"""
+    res = np.empty(len(origins), dtype=bool)
+    for s in range(0, len(origins), DEFAULT_BATCH):
+        sl = slice(s, s + DEFAULT_BATCH)
+        r = scene.run(np.ascontiguousarray(origins[sl], np.float32), np.ascontiguousarray(dirs[sl], np.float32),
+                      dists=np.ascontiguousarray(tfar[sl], np.float32), query="OCCLUDED")
+        res[sl] = np.asarray(r) != -1
+    return res
+
+
 def embree_trace(tris: np.ndarray, rays: np.ndarray, batch: int = DEFAULT_BATCH) -> np.ndarray:
     """Build an Embree scene for `tris` and return the closest hits of `rays` (HIT_DTYPE, ray order)."""
     scene, keep = build_scene(tris)
