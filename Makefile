@@ -43,7 +43,6 @@ venv: .venv/.stamp
 verilator:
 	@command -v verilator >/dev/null || { echo "[deps] installing verilator from apt"; \
 	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq verilator >/dev/null; }
-	@verilator --version
 
 # Compiles the Scala side and records its runtime classpath so entry points start as plain `java`.
 $(CP_FILE): $(SCALA_SRC)
@@ -59,6 +58,7 @@ build/scenes/%.obj: | venv
 
 # ---------------------------------------------------------------- main job
 run: deps build/scenes/cornell.obj
+	@mkdir -p build/run
 	@$(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=build/run/golden
 	@$(MAKE) --no-print-directory check SCENE=$(SCENE) GOLDEN=build/run/golden | tee build/run/check.log
 	@$(MAKE) --no-print-directory analyze SCENE=$(SCENE) GOLDEN=build/run/golden OUT=build/run/analysis | tee build/run/analyze.log
@@ -67,6 +67,7 @@ run: deps build/scenes/cornell.obj
 # ---------------------------------------------------------------- user commands
 golden: venv
 	@test -n "$(OUT)" || { echo "error: give OUT=<dir> for the golden trace" >&2; exit 2; }
+	@mkdir -p $(dir $(abspath $(OUT)))
 	$(PY) -m golden.export --scene $(SCENE) --out $(OUT) --width $(WIDTH) --height $(HEIGHT) --depth $(DEPTH) --seed $(SEED)
 
 trace: deps

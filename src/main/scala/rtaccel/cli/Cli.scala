@@ -30,7 +30,7 @@ object Cli {
     */
   def params(a: Args): PlatformParams = {
     val cfg = a.get("config", "fit")
-    val base = if (cfg == "fit") Presets.paper2017 else Presets.byName(cfg)
+    val base = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),

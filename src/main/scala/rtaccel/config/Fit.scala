@@ -26,7 +26,7 @@ object Fit {
     */
   def fitTo(p: PlatformParams, bvh: Mbvh): PlatformParams = {
     val n = needs(bvh)
-    p.copy(name = s"${p.name}-fit",
+    p.copy(name = if (p.name.endsWith("fit")) p.name else s"${p.name}-fit",
       refs = RefFormat(n.nodeIdBits, n.primIndexBits, n.countBits, if (p.refs.levelBits == 0) 0 else n.levelBits),
       stackDepth = n.stackDepth)
   }

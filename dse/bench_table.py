@@ -1,0 +1,21 @@
+"""python -m dse.bench_table NAME MODEL_JSON EMBREE_JSON — side-by-side figures of one `make bench` run."""
+import json
+import sys
+
+
+def main(name, model_path, embree_path):
+    m = json.loads(open(model_path).read().strip().splitlines()[-1])
+    e = json.loads(open(embree_path).read().strip().splitlines()[-1])
+    assert m["rays"] == e["rays"], "model and Embree must be timed on the same rays"
+    mr, er = m["model_rays_per_s_median"], e["embree_rays_per_s_median"]
+    mb, eb = m["model_build_s_median"], e["embree_build_s_median"]
+    print(f"[bench] {name}: {m['triangles']} triangles, {m['rays']} rays, medians of {m['repeat']} runs, "
+          f"model {m['threads']} thread / Embree {e['threads']} thread(s)")
+    print(f"  trace  model {mr:12.0f} rays/s   Embree {er:12.0f} rays/s   Embree/model {er / mr:6.1f}x")
+    print(f"  build  model {mb:12.3f} s        Embree {eb:12.3f} s        model/Embree {mb / eb:6.1f}x")
+    print(json.dumps({"scene": name, "rays": m["rays"], "model_rays_per_s": mr, "embree_rays_per_s": er,
+                      "model_build_s": mb, "embree_build_s": eb}))
+
+
+if __name__ == "__main__":
+    main(*sys.argv[1:4])

@@ -1,0 +1,42 @@
+"""python -m dse.run_summary RUN_DIR — the readable end of `make run`.
+
+Reads the last JSON line of RUN_DIR/check.log (model vs Embree) and RUN_DIR/analyze.log (memory-access
+analysis), prints a short report, and as its last line one JSON object with the headline metrics.
+"""
+import json
+import sys
+from pathlib import Path
+
+
+def last_json(path: Path) -> dict:
+    for line in reversed(path.read_text().splitlines()):
+        line = line.strip()
+        if line.startswith("{"):
+            return json.loads(line)
+    raise SystemExit(f"error: no JSON result line in {path}; the step that writes it failed")
+
+
+def main(run_dir: str) -> None:
+    d = Path(run_dir)
+    check, analysis = last_json(d / "check.log"), last_json(d / "analyze.log")
+    meta = json.loads((d / "golden" / "meta.json").read_text())
+    bpr = analysis["bytes_per_ray"]
+    k = str(analysis["levels_for_mppl"])
+    print(f"scene       {meta.get('scene')}  ({meta.get('triangles')} triangles)")
+    print(f"rays        {check['rays']}  (camera + path-traced bounces, per depth {meta.get('rays_per_depth')})")
+    print(f"vs Embree   agree {check['agree']}, classified {check['classified']}, unexplained {check['unexplained']}, "
+          f"max rel t err {check['max_rel_t_err']:.2e}")
+    print("bytes/ray   MPPL: node / prim / total")
+    for mppl, v in sorted(bpr.items(), key=lambda kv: int(kv[0])):
+        print(f"            {int(mppl):>4}: {v['node']:9.1f} / {v['prim']:8.1f} / {v['total']:9.1f}")
+    print(f"top 4 levels (MPPL {k}): {analysis['top4_levels_nodes']} nodes = {100 * analysis['top4_levels_node_share']:.1f}% "
+          f"of nodes, {100 * analysis['top4_levels_access_share']:.1f}% of node accesses")
+    print(f"outputs     {d}/golden, {d}/analysis (CSV + PNG)")
+    print(json.dumps({"scene": meta.get("scene"), "rays": check["rays"], "agree": check["agree"],
+                      "unexplained": check["unexplained"], "node_bytes_per_ray": bpr[k]["node"],
+                      "prim_bytes_per_ray": bpr[k]["prim"], "mppl": int(k),
+                      "top4_levels_access_share": analysis["top4_levels_access_share"]}))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1] if len(sys.argv) > 1 else "build/run")
