@@ -17,7 +17,7 @@ from .io import GoldenError, check_hits, check_rays, check_tris, load_hits, load
 from .trace import build_scene, occluded
 
 AGREE_REL = 1e-5        # both hit, |t_a - t_b| <= AGREE_REL * max(|t_a|, |t_b|): agree (coincident triangles)
-DEGEN_REL = 2.0 ** -23  # zero-area: |cross(e1, e2)| <= DEGEN_REL * (longest edge)^2 (a line at float32 resolution)
+DEGEN_ULPS = 2.0        # zero-area: height <= DEGEN_ULPS * 2^-23 * max |vertex coordinate| (a line in float32)
 BARY_TOL = 1e-5         # barycentric tolerance of the edge/vertex test ...
 POS_TOL = 4e-6          # ... widened to POS_TOL * S in distance (S: per-ray position scale, see _scale)
 SCALE_FLOOR = 1e-3      # S >= SCALE_FLOOR * scene extent
@@ -35,12 +35,17 @@ def _dot(a, b):
 
 
 def degenerate_mask(tris) -> np.ndarray:
-    """True for triangles that are zero-area at float32 resolution (computed in float64)."""
+    """True for triangles that are zero-area at float32 resolution (computed in float64): all vertices equal,
+    or the height over the longest edge (2 * area / longest edge) is at most DEGEN_ULPS float32 ulps of the
+    largest vertex coordinate magnitude (e.g. collinear points after rounding to float32)."""
     t = tris.astype(np.float64)
     e1, e2, e3 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0], t[:, 2] - t[:, 1]
     area2 = _norm(np.cross(e1, e2))
-    lmax2 = np.max(np.stack([_dot(e1, e1), _dot(e2, e2), _dot(e3, e3)]), axis=0)
-    return area2 <= DEGEN_REL * lmax2
+    lmax = np.sqrt(np.max(np.stack([_dot(e1, e1), _dot(e2, e2), _dot(e3, e3)]), axis=0))
+    m = np.max(np.abs(t), axis=(1, 2))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        height = np.where(lmax > 0, area2 / np.where(lmax > 0, lmax, 1), 0.0)
+    return (lmax == 0) | (height <= DEGEN_ULPS * 2.0 ** -23 * m)
 
 
 def _intersect64(o, d, tri):
