@@ -36,8 +36,10 @@ object Aabb {
 
 /** Binned SAH builder with the paper's MPPL rule (Section 5.2): a range of more than MPPL primitives is
   * always split; at or below MPPL the SAH decides between a leaf and a split.
-  * Costs are memory traffic (Section 5.1): a primitive costs its access size, and one binary split costs
-  * nodeBytes/(M-1) because one M-wide node fetch replaces M-1 binary splits after collapsing.
+  * Costs are memory traffic, as the paper states (Section 5.1): the node's access size is the traversal cost
+  * of a split and a primitive's access size its intersection cost. (Charging only nodeBytes/(M-1) per
+  * binary split, the M-wide fetch spread over the splits it replaces, makes the SAH split nearly every
+  * leaf down to one primitive, and MPPL stops mattering: unlike the paper's Fig 4.)
   */
 private[bvh] final class BinaryBuilder(s: Scene, mppl: Int, bins: Int, nodeCost: Double, primCost: Double) {
   val order: Array[Int] = Array.tabulate(s.triangles)(identity)
