@@ -19,7 +19,8 @@ from scenes import procedural
 
 CP_FILE = os.environ.get("RTACCEL_CLASSPATH", "")
 FIX = Path(os.environ.get("RTACCEL_FIXTURES", "build/fixtures"))
-SHARED = Path(os.environ.get("RTACCEL_SHARED_SCENES", Path(__file__).resolve().parents[3] / "shared" / "scenes"))
+from scenes.tests.helpers import SHARED_SCENES
+SHARED = Path(SHARED_SCENES)
 ROOT = Path(__file__).resolve().parents[2]
 
 needs_model = pytest.mark.skipif(not (CP_FILE and Path(CP_FILE).is_file()),

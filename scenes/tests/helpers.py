@@ -5,14 +5,14 @@ import sys
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SHARED_SCENES = os.environ.get("RTACCEL_SCENES", os.path.join(os.path.dirname(ROOT), "shared", "scenes"))
+SHARED_SCENES = os.environ.get("RTACCEL_SHARED_SCENES", os.path.join(os.path.dirname(ROOT), "shared", "scenes"))
 
 
 def shared_scene(name):
     """Path of a real scene in shared/scenes, or skip the test with a message when it is absent."""
     p = os.path.join(SHARED_SCENES, name)
     if not os.path.isfile(p):
-        pytest.skip(f"real scene {p} not available (set RTACCEL_SCENES to the shared/scenes directory)")
+        pytest.skip(f"real scene {p} not available (set RTACCEL_SHARED_SCENES to the shared/scenes directory)")
     return p
 
 
