@@ -117,7 +117,7 @@ test: deps fixtures
 	RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=1; \
 	RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
 	  $(PY) -m pytest -q --junitxml=build/test-reports/python/pytest.xml || rc=1; \
-	exit $$rc
+	$(PY) tools/count_tests.py build/test-reports; exit $$rc
 
 clean:
 	rm -rf build target project/target
