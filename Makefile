@@ -25,7 +25,8 @@ TRIS       = $$(tools/tris $(SCENE))
 
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
-.PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace check analyze bench clean
+.PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace check analyze bench clean \
+        verilog lint simulate
 
 help:
 	@echo "make run | test | golden | trace | check | analyze | bench   (see README.md)"
@@ -98,6 +99,24 @@ bench: deps
 	  $(PY) -m golden.bench --scene $$s --rays $$G/rays.npy > build/bench/$$n/embree.json || exit $$?; \
 	  $(PY) -m dse.bench_table $$n build/bench/$$n/model.json build/bench/$$n/embree.json; \
 	done
+
+# ---------------------------------------------------------------- RTL
+VCONFIG = $(if $(filter fit,$(CONFIG)),paper2017,$(CONFIG))
+TUS_ARG = $(if $(TUS),--tus $(TUS))
+verilog: deps
+	$(JAVA) rtaccel.cli.EmitVerilog --config $(VCONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) --out build/$(VCONFIG)
+
+# Lint waivers (reasons in docs/platform.md): DECLFILENAME (firtool names files after modules, one per file is
+# already the case), UNUSEDSIGNAL (generated ports of library queues/arbiters that a configuration leaves unused).
+LINT_WAIVERS = -Wno-DECLFILENAME -Wno-UNUSEDSIGNAL
+lint: verilog verilator
+	verilator --lint-only -Wall $(LINT_WAIVERS) --top-module RtAccelTop build/$(VCONFIG)/*.sv && echo "[lint] build/$(VCONFIG): verilator -Wall clean"
+
+SIM_ARGS = $(if $(MEM_JITTER),--mem-jitter $(MEM_JITTER)) $(if $(HOST_STALL),--host-stall $(HOST_STALL))
+simulate: deps
+	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
+	  OUT=$${OUT:-build/simulate/$$(basename $(SCENE))}; T=$(TRIS) && \
+	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT --config $(CONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) $(SIM_ARGS)
 
 # ---------------------------------------------------------------- tests
 FIXTURE_SCENES := cornell hairball soup extreme

@@ -11,7 +11,7 @@ lazy val root = (project in file("."))
     name := "rtaccel",
     libraryDependencies ++= Seq(
       "org.chipsalliance" %% "chisel"     % chiselVersion,
-      "edu.berkeley.cs"   %% "chiseltest" % "6.0.0" % Test,
+      "edu.berkeley.cs"   %% "chiseltest" % "6.0.0", // also used by the simulate entry point
       "org.scalatest"     %% "scalatest"  % "3.2.19" % Test,
       "com.lihaoyi"       %% "ujson"      % "3.1.0"
     ),

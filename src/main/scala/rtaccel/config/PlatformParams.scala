@@ -46,7 +46,9 @@ final case class PlatformParams(
   nodeCache: CacheParams = CacheParams(),
   primCache: CacheParams = CacheParams(),
   memory: MemoryParams = MemoryParams(),
-  sahBins: Int = 16
+  sahBins: Int = 16,
+  axiDataBits: Int = 256,
+  divStages: Int = 6
 ) {
   require(tus >= 1 && tus <= 1024, s"TUS must be in 1..1024 (got $tus)")
   require(Set(2, 4, 8)(m), s"M (MBVH width) must be 2, 4 or 8 (got $m)")
@@ -56,6 +58,8 @@ final case class PlatformParams(
   require(stackDepth >= 1, s"stack depth must be at least 1 (got $stackDepth)")
   require(clockMhz > 0, "clock must be positive")
   require(sahBins >= 2, "SAH needs at least 2 bins")
+  require(Seq(64, 128, 256, 512).contains(axiDataBits), s"AXI data width must be 64, 128, 256 or 512 bits (got $axiDataBits)")
+  require(divStages >= 0 && divStages <= 32, s"divider pipeline stages must be 0..32 (got $divStages)")
 
   /** Bytes one node occupies: M x (6 floats + ref) = 28*M, rounded up to a power of two so a node id
     * maps to an address by a shift (QBVH: 112 B stored in 128 B, as in the paper).
@@ -68,6 +72,7 @@ final case class PlatformParams(
   /** Bytes one node fetch moves (paper: 128 B for QBVH); defaults to the node's stored size. */
   val nodeAccessBytes: Int = if (nodeAccessBytesOverride > 0) nodeAccessBytesOverride else nodeStrideBytes
   require(nodeAccessBytes >= nodeBits / 8, s"node access of $nodeAccessBytes B is smaller than a node (${nodeBits / 8} B); raise the node access size")
+  val tuBits: Int = math.max(1, 32 - Integer.numberOfLeadingZeros(tus - 1))
   val cyclesPerSecond: Double = clockMhz * 1e6
   val memBytesPerCycle: Double = memory.bytesPerSecond * memory.sustainedEfficiency / cyclesPerSecond
 }

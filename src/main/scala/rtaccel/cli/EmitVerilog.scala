@@ -1,0 +1,24 @@
+package rtaccel.cli
+
+import java.nio.file.{Files, Paths}
+import rtaccel.config.Presets
+import rtaccel.top.RtAccelTop
+
+/** make verilog: SystemVerilog of the board top for a preset (optionally with TUS/M/MPPL overrides), one
+  * file per module under OUT, through firtool.
+  */
+object EmitVerilog {
+  def main(args: Array[String]): Unit = Cli.run(args) { a =>
+    val cfg = a.need("config")
+    if (cfg == "fit") throw new rtaccel.io.InputError("make verilog needs a preset (CONFIG=paper2017|paper2017-lrp|small); fitted configs come from a scene via make simulate")
+    val p0 = Cli.params(a)
+    val p = p0.copy(name = cfg)
+    val out = Paths.get(a.get("out", s"build/$cfg"))
+    Files.createDirectories(out)
+    val firtoolOpts = Array("-disable-all-randomization", "-strip-debug-info", "--split-verilog", "-o", out.toString)
+    _root_.circt.stage.ChiselStage.emitSystemVerilog(new RtAccelTop(p), Array("--target-dir", out.toString), firtoolOpts)
+    val files = Files.list(out).toArray.map(_.toString).filter(f => f.endsWith(".sv") || f.endsWith(".v")).sorted
+    System.err.println(s"[verilog] ${files.length} files in $out (config ${p.name}: ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}, stack ${p.stackDepth})")
+    println(ujson.write(ujson.Obj("config" -> p.name, "out" -> out.toString, "files" -> files.length, "top" -> "RtAccelTop")))
+  }
+}

@@ -1,0 +1,119 @@
+package rtaccel.cli
+
+import java.nio.file.{Files, Path, Paths}
+import chisel3._
+import chiseltest._
+import chiseltest.simulator.{VerilatorBackendAnnotation, VerilatorCFlags}
+import firrtl2.options.TargetDirAnnotation
+import rtaccel.bvh.MemoryImage
+import rtaccel.config.PlatformParams
+import rtaccel.io.InputError
+import rtaccel.mc.AxiParams
+import rtaccel.model.{AccessSink, RayStats, Traversal}
+import rtaccel.scene.{Hits, Rays}
+import rtaccel.sim.{DramConfig, ImageFile, RaysFile, SimHarness, SimSetup}
+import rtaccel.top.{RegMap, RtAccelTop}
+
+/** make simulate: the platform RTL (Verilator) on a rays file, checked ray by ray against the reference
+  * model; writes OUT/hits.npy and prints the metrics JSON as the last line.
+  */
+object Simulate {
+  def main(args: Array[String]): Unit = Cli.run(args)(main0)
+
+  final case class Outcome(json: ujson.Obj, hits: Hits)
+
+  def main0(a: Args): Unit = {
+    val out = a.path("out")
+    val o = run(a)
+    o.hits.save(out.resolve("hits.npy"))
+    Cli.writeText(out.resolve("summary.json"), ujson.write(o.json, indent = 2) + "\n")
+    println(ujson.write(o.json))
+  }
+
+  def run(a: Args): Outcome = {
+    val (scene, rays, scaleExp) = Cli.inputs(a)
+    val b = Cli.build(scene, Cli.params(a), Cli.fitRequested(a))
+    val p = b.params
+    val img = MemoryImage.pack(b.bvh, b.scene, p)
+    val stats = new RayStats
+    val model = new Traversal(img).traceAll(rays, AccessSink.none, stats)
+    val label = a.get("scene-label", a.need("tris"))
+    val work = Paths.get(a.get("work", "build/sim")).resolve(s"${Paths.get(label).getFileName}-${p.name}-tus${p.tus}-m${p.m}-mppl${p.mppl}")
+    Files.createDirectories(work)
+    val axi = AxiParams(dataBits = p.axiDataBits)
+    val layout = ImageFile.write(img, axi, work.resolve("image.hex"))
+    RaysFile.write(rays, work.resolve("rays.hex"))
+    val den = 1000
+    val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
+      bytesPerCycleDen = den, randomExtraLatency = a.int("mem-jitter", 0), seed = a.int("seed", 1))
+    val setup = SimSetup(rays.count, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
+      layout.words, layout.primBaseBytes, dram, hostStallPercent = a.int("host-stall", 0), seed = a.int("seed", 1))
+    val maxCycles = a.opt("max-cycles").map(_.toLong).getOrElse(1000000L + 200000L * rays.count)
+    System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build in $work")
+
+    var result: Outcome = null
+    val t0 = System.nanoTime()
+    RawTester.test(new SimHarness(p, setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
+      VerilatorCFlags(Seq("-O1")))) { dut =>
+      dut.clock.setTimeout(0)
+      val tSim = System.nanoTime()
+      var stepped = 0L
+      val chunk = 20000
+      var received = 0L
+      var lastReport = System.nanoTime()
+      while (received < rays.count && stepped < maxCycles) {
+        dut.clock.step(chunk); stepped += chunk
+        received = dut.io.received.peek().litValue.toLong
+        if (System.nanoTime() - lastReport > 5e9) {
+          System.err.println(f"[simulate] ${stepped / 1e6}%.1fM cycles, $received/${rays.count} hits"); lastReport = System.nanoTime()
+        }
+      }
+      val simWall = (System.nanoTime() - tSim) / 1e9
+      val cycles = dut.io.doneCycle.peek().litValue.toLong
+      def reg(i: Int): Long = { dut.io.regAddr.poke(i.U); dut.io.regData.peek().litValue.toLong }
+      val counters = RtAccelTop.counterNames.zipWithIndex.map { case (n, i) => n -> reg(RegMap.Counters + i) }.toMap
+      // results, by ray id
+      val hits = Hits.empty(rays.count)
+      val seen = new Array[Int](rays.count)
+      var overflow = 0
+      for (k <- 0 until math.min(received, rays.count.toLong).toInt) {
+        dut.io.readIdx.poke(k.U)
+        val w = dut.io.readData.peek().litValue
+        def word(i: Int) = ((w >> (32 * i)) & 0xffffffffL).toLong.toInt
+        val id = word(0)
+        if (id >= 0 && id < rays.count) {
+          seen(id) += 1
+          hits.t(id) = java.lang.Float.intBitsToFloat(word(1)); hits.prim(id) = word(2)
+          hits.u(id) = java.lang.Float.intBitsToFloat(word(3)); hits.v(id) = java.lang.Float.intBitsToFloat(word(4))
+          if ((word(5) & 1) != 0) overflow += 1
+        }
+      }
+      def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
+      val mismatch = (0 until rays.count).count(i => seen(i) >= 1 && (hits.prim(i) != model.prim(i) ||
+        bits(hits.t(i)) != bits(model.t(i)) || bits(hits.u(i)) != bits(model.u(i)) || bits(hits.v(i)) != bits(model.v(i))))
+      val lost = seen.count(_ == 0)
+      val duplicated = seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
+      val n = rays.count.toDouble
+      val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond
+      val json = ujson.Obj(
+        "rays" -> rays.count, "cycles" -> cycles, "clock_mhz" -> p.clockMhz,
+        "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
+        "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,
+        "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
+        "prim_bytes_per_ray" -> counters("prim_requests") * p.primAccessBytes / n,
+        "mem_utilisation" -> counters("mem_busy_beats") * axi.beatBytes / (math.max(1, cycles) * peakBytesPerCycle),
+        "sim_cycles_per_wall_s" -> stepped / simWall,
+        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "m" -> p.m, "mppl" -> p.mppl,
+        "stack_overflow_rays" -> overflow, "model_stack_overflow_rays" -> stats.overflows,
+        "node_requests" -> counters("node_requests"), "model_node_fetches" -> stats.nodeFetches,
+        "prim_requests" -> counters("prim_requests"), "model_prim_tests" -> stats.primTests,
+        "timed_out" -> (received < rays.count), "normalize_exponent" -> scaleExp,
+        "mem_jitter" -> dram.randomExtraLatency, "host_stall_percent" -> setup.hostStallPercent,
+        "counters" -> ujson.Obj.from(counters.map { case (k, v) => k -> ujson.Num(v.toDouble) }),
+        "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> Cli.version)
+      result = Outcome(json, hits)
+    }
+    if (result == null) throw new InputError("simulation did not complete")
+    result
+  }
+}

@@ -1,0 +1,80 @@
+package rtaccel.iu
+
+import chisel3._
+import chisel3.util._
+import rtaccel.config.PlatformParams
+import rtaccel.mc.{FetchBeat, FetchReq}
+
+/** The IU of paper Fig 1: takes requests from all TUs (round-robin), asks the memory controller for the
+  * node or the leaf's primitives, assembles them from memory beats and streams them through the box and
+  * triangle pipelines, one node or one primitive per cycle. Results are broadcast to the TUs (each TU has
+  * at most one request outstanding and always takes its results, so the pipelines never stall).
+  * Memory requests are issued ahead while earlier data is still arriving, up to `maxOutstanding`.
+  */
+class IntersectionUnit(p: PlatformParams, beatBits: Int, maxOutstanding: Int = 16) extends Module {
+  val io = IO(new Bundle {
+    val req = Flipped(Vec(p.tus, Decoupled(new IuReq(p))))
+    val box = Valid(new BoxResult(p))
+    val tri = Valid(new TriResult(p))
+    val mem = new Bundle {
+      val req = Decoupled(new FetchReq)
+      val resp = Flipped(Decoupled(new FetchBeat(beatBits)))
+    }
+  })
+  private val beatWords = beatBits / 32
+  private val nodeWords = p.nodeStrideBytes / 4
+  private val primWords = p.primStrideBytes / 4
+  require(beatWords <= primWords && nodeWords % beatWords == 0, s"a memory beat of $beatBits bits must divide a node and a primitive")
+  private val primFlagBit = p.refs.refBits - 1
+
+  // ---- arbitration and issue: a request goes to memory and its context to the job FIFO together
+  val arb = Module(new RRArbiter(new IuReq(p), p.tus))
+  arb.io.in <> io.req
+  val jobs = Module(new Queue(new IuReq(p), maxOutstanding))
+  io.mem.req.valid := arb.io.out.valid && jobs.io.enq.ready
+  io.mem.req.bits.cref := arb.io.out.bits.cref
+  jobs.io.enq.valid := arb.io.out.valid && io.mem.req.ready
+  jobs.io.enq.bits := arb.io.out.bits
+  arb.io.out.ready := io.mem.req.ready && jobs.io.enq.ready
+
+  // ---- collection: beats in request order become whole nodes or whole primitives
+  val job = jobs.io.deq.bits
+  val isLeaf = job.cref(primFlagBit)
+  val primCount = ((job.cref >> p.refs.primIndexBits) & ((1 << p.refs.countBits) - 1).U) +& 1.U
+  val buf = Reg(Vec(math.max(nodeWords, primWords), UInt(32.W)))
+  val beatIdx = RegInit(0.U(8.W))
+  val primIdx = RegInit(0.U(8.W))
+  io.mem.resp.ready := jobs.io.deq.valid
+  val unitBeats = Mux(isLeaf, (primWords / beatWords).U, (nodeWords / beatWords).U)
+  val beatFire = io.mem.resp.fire
+  val unitDone = beatFire && beatIdx === unitBeats - 1.U
+  val jobDone = unitDone && (!isLeaf || primIdx === primCount - 1.U)
+  // the words of the unit as they will be once this beat is stored (the last beat goes straight through)
+  val words = Wire(Vec(buf.length, UInt(32.W)))
+  for (w <- buf.indices) {
+    val thisBeat = (w / beatWords).U === beatIdx
+    words(w) := Mux(thisBeat, io.mem.resp.bits.data((w % beatWords) * 32 + 31, (w % beatWords) * 32), buf(w))
+  }
+  when(beatFire) {
+    buf := words
+    beatIdx := Mux(unitDone, 0.U, beatIdx + 1.U)
+    when(unitDone && isLeaf) { primIdx := Mux(jobDone, 0.U, primIdx + 1.U) }
+  }
+  jobs.io.deq.ready := jobDone
+
+  val boxPipe = Module(new BoxPipe(p))
+  boxPipe.io.in.valid := unitDone && !isLeaf
+  boxPipe.io.in.bits.tu := job.tu
+  boxPipe.io.in.bits.ray := job.ray
+  boxPipe.io.in.bits.tmax := job.tmax
+  boxPipe.io.in.bits.words := VecInit(words.take(7 * p.m))
+  val triPipe = Module(new TriPipe(p))
+  triPipe.io.in.valid := unitDone && isLeaf
+  triPipe.io.in.bits.tu := job.tu
+  triPipe.io.in.bits.ray := job.ray
+  triPipe.io.in.bits.tmax := job.tmax
+  triPipe.io.in.bits.words := VecInit(words.take(10))
+  triPipe.io.in.bits.last := jobDone
+  io.box := boxPipe.io.out
+  io.tri := triPipe.io.out
+}

@@ -1,0 +1,66 @@
+package rtaccel.sim
+
+import chisel3._
+import chisel3.util._
+import chisel3.util.experimental.loadMemoryFromFileInline
+import chisel3.util.random.LFSR
+import rtaccel.config.PlatformParams
+import rtaccel.top.{RegMap, RtAccelTop}
+
+/** What a simulation run needs besides the platform parameters. */
+final case class SimSetup(rayCount: Int, raysHex: String, imageHex: String, imageWords: Int, primBaseBytes: Long,
+                          dram: DramConfig, hostStallPercent: Int = 0, seed: Int = 1) {
+  require(rayCount >= 1, "a simulation needs at least one ray")
+  require(hostStallPercent >= 0 && hostStallPercent < 100, "host stall percentage must be 0..99")
+}
+
+/** Simulation-only wrapper: the board top with the rays in a ROM, the memory image in a DRAM model and the
+  * hits captured in a RAM, so that a whole scene runs without per-cycle work in Scala. The host side can
+  * refuse hits at random (backpressure). Results are read out through `readIdx`/`readData` at the end.
+  */
+class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
+  val io = IO(new Bundle {
+    val received = Output(UInt(32.W))
+    val sent = Output(UInt(32.W))
+    val doneCycle = Output(UInt(64.W)) // cycles until the last hit arrived (counting stops there)
+    val readIdx = Input(UInt(32.W))
+    val readData = Output(UInt(RtAccelTop.HitBits.W))
+    val regAddr = Input(UInt(8.W))
+    val regData = Output(UInt(64.W))
+  })
+  val top = Module(new RtAccelTop(p))
+  val dram = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, s.dram))
+  dram.io.axi <> top.io.mem
+
+  val started = RegInit(false.B)
+  started := true.B
+  top.io.regs.wr.valid := !started
+  top.io.regs.wr.bits.addr := RegMap.PrimBase.U
+  top.io.regs.wr.bits.data := s.primBaseBytes.U
+  top.io.regs.rdAddr := io.regAddr
+  io.regData := top.io.regs.rdData
+
+  val rays = Mem(s.rayCount, UInt(RtAccelTop.RayBits.W))
+  loadMemoryFromFileInline(rays, s.raysHex)
+  val sent = RegInit(0.U(32.W))
+  top.io.rays.valid := started && sent < s.rayCount.U
+  top.io.rays.bits.tdata := rays(sent)
+  top.io.rays.bits.tlast := sent === (s.rayCount - 1).U
+  when(top.io.rays.fire) { sent := sent + 1.U }
+
+  val hits = Mem(s.rayCount, UInt(RtAccelTop.HitBits.W))
+  val received = RegInit(0.U(32.W))
+  val lfsr = LFSR(16, seed = Some(s.seed & 0xffff | 1))
+  val stall = if (s.hostStallPercent == 0) false.B else (lfsr(6, 0) < (s.hostStallPercent * 128 / 100).U)
+  top.io.hits.ready := !stall
+  when(top.io.hits.fire) {
+    when(received < s.rayCount.U) { hits(received) := top.io.hits.bits.tdata }
+    received := received + 1.U
+  }
+  val cycle = RegInit(0.U(64.W))
+  when(received < s.rayCount.U) { cycle := cycle + 1.U }
+  io.doneCycle := cycle
+  io.received := received
+  io.sent := sent
+  io.readData := hits(io.readIdx)
+}

@@ -1,0 +1,67 @@
+package rtaccel.tc
+
+import chisel3._
+import chisel3.util._
+import rtaccel.config.PlatformParams
+import rtaccel.fp.{FpDivPipe, FpFormat}
+import rtaccel.tu.{TuRay, TuResult}
+
+/** A ray from the host: id and the rays.npy row (ox, oy, oz, dx, dy, dz, tmin, tmax) as fp32 bits. */
+class HostRay extends Bundle {
+  val id = UInt(32.W)
+  val f = Vec(8, UInt(32.W))
+}
+
+/** Traversal controller (paper Section 4): prepares each host ray (1/d with three pipelined dividers,
+  * one ray per cycle), hands it to the lowest-numbered free TU, and returns exactly one result per ray.
+  */
+class TraversalController(p: PlatformParams) extends Module {
+  val io = IO(new Bundle {
+    val in = Flipped(Decoupled(new HostRay))
+    val out = Decoupled(new TuResult)
+    val tuRay = Vec(p.tus, Decoupled(new TuRay(p)))
+    val tuResult = Flipped(Vec(p.tus, Decoupled(new TuResult)))
+  })
+  private val f = FpFormat.fp32
+  private val one = "h3f800000".U(32.W)
+
+  // Ray preparation: the pipeline cannot stall, so a ray enters only when the queue behind it has room
+  // for everything already in flight.
+  private val lat = p.divStages
+  val prepared = Module(new Queue(new TuRay(p), lat + 2))
+  val inFlight = RegInit(0.U(log2Ceil(lat + 3).W))
+  io.in.ready := inFlight +& prepared.io.count < (lat + 2).U
+  val divs = Seq.fill(3)(Module(new FpDivPipe(f, lat)))
+  for (a <- 0 until 3) {
+    divs(a).io.in.valid := io.in.fire
+    divs(a).io.in.bits.a := one
+    divs(a).io.in.bits.b := io.in.bits.f(3 + a)
+  }
+  val rayDelayed = ShiftRegister(io.in.bits, lat)
+  val outValid = divs(0).io.out.valid
+  inFlight := inFlight + io.in.fire.asUInt - outValid.asUInt
+  prepared.io.enq.valid := outValid
+  prepared.io.enq.bits.id := rayDelayed.id
+  for (a <- 0 until 3) {
+    prepared.io.enq.bits.ray.o(a) := rayDelayed.f(a)
+    prepared.io.enq.bits.ray.d(a) := rayDelayed.f(3 + a)
+    prepared.io.enq.bits.ray.inv(a) := divs(a).io.out.bits
+  }
+  prepared.io.enq.bits.ray.tmin := rayDelayed.f(6)
+  prepared.io.enq.bits.tmax := rayDelayed.f(7)
+  assert(!outValid || prepared.io.enq.ready, "ray preparation overran its queue")
+
+  // Dispatch to the first free TU.
+  val free = VecInit(io.tuRay.map(_.ready))
+  val target = PriorityEncoder(free)
+  prepared.io.deq.ready := free.asUInt.orR
+  for ((t, i) <- io.tuRay.zipWithIndex) {
+    t.valid := prepared.io.deq.valid && target === i.U
+    t.bits := prepared.io.deq.bits
+  }
+
+  // Results: round-robin over TUs, with host backpressure.
+  val arb = Module(new RRArbiter(new TuResult, p.tus))
+  arb.io.in <> io.tuResult
+  io.out <> arb.io.out
+}

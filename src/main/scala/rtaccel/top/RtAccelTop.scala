@@ -1,0 +1,88 @@
+package rtaccel.top
+
+import chisel3._
+import chisel3.util._
+import rtaccel.config.PlatformParams
+import rtaccel.iu.IntersectionUnit
+import rtaccel.mc.{AxiParams, AxiReadMaster, MemoryController}
+import rtaccel.tc.TraversalController
+import rtaccel.tu.TraversalUnit
+
+/** One AXI4-Stream beat (tvalid/tready come from Decoupled). */
+class AxisBeat(bits: Int) extends Bundle {
+  val tdata = UInt(bits.W)
+  val tlast = Bool()
+}
+
+object RtAccelTop {
+  /** Ray beat: 9 words, word i at bits 32i+31..32i: id, ox, oy, oz, dx, dy, dz, tmin, tmax. */
+  val RayBits = 9 * 32
+  /** Hit beat: 6 words: id, t, prim, u, v, flags (bit 0 = stack overflow). */
+  val HitBits = 6 * 32
+  val counterNames: Seq[String] = Seq("cycles", "busy_cycles", "rays_in", "hits_out", "node_requests",
+    "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats", "stall_iu_arbitration", "stall_memory_request",
+    "stall_memory_data", "stall_host_backpressure", "tu_busy_cycles")
+}
+
+/** Board top (paper Fig 1, with the PCIe communication controller replaced by AXI4-Stream): rays in, hits
+  * out, an AXI4 read master to onboard memory, and a register port for configuration and counters.
+  */
+class RtAccelTop(p: PlatformParams) extends Module {
+  val axiP = AxiParams(dataBits = p.axiDataBits)
+  val io = IO(new Bundle {
+    val rays = Flipped(Decoupled(new AxisBeat(RtAccelTop.RayBits)))
+    val hits = Decoupled(new AxisBeat(RtAccelTop.HitBits))
+    val mem = new AxiReadMaster(axiP)
+    val regs = new RegPort
+  })
+  val tc = Module(new TraversalController(p))
+  val tus = Seq.tabulate(p.tus)(i => Module(new TraversalUnit(p, i)))
+  val iu = Module(new IntersectionUnit(p, axiP.dataBits))
+  val mc = Module(new MemoryController(p, axiP))
+  val configWord = BigInt(p.m) | (BigInt(p.mppl) << 8) | (BigInt(p.tus) << 16) | (BigInt(p.stackDepth) << 32)
+  val regs = Module(new RegFile(configWord, RtAccelTop.counterNames))
+  regs.io.port <> io.regs
+
+  // host stream -> TC
+  tc.io.in.valid := io.rays.valid
+  tc.io.in.bits.id := io.rays.bits.tdata(31, 0)
+  for (k <- 0 until 8) tc.io.in.bits.f(k) := io.rays.bits.tdata(32 * k + 63, 32 * k + 32)
+  io.rays.ready := tc.io.in.ready
+  io.hits.valid := tc.io.out.valid
+  val h = tc.io.out.bits
+  io.hits.bits.tdata := Cat(h.overflow.asUInt.pad(32), h.v, h.u, h.prim, h.t, h.id)
+  io.hits.bits.tlast := false.B
+  tc.io.out.ready := io.hits.ready
+
+  for ((tu, i) <- tus.zipWithIndex) {
+    tu.io.ray <> tc.io.tuRay(i)
+    tc.io.tuResult(i) <> tu.io.result
+    iu.io.req(i) <> tu.io.req
+    tu.io.box := iu.io.box
+    tu.io.tri := iu.io.tri
+  }
+  mc.io.req <> iu.io.mem.req
+  iu.io.mem.resp <> mc.io.resp
+  mc.io.primBase := regs.io.primBase
+  io.mem <> mc.io.axi
+
+  // counters
+  val perf = Module(new PerfCounters(RtAccelTop.counterNames))
+  perf.io.clear := regs.io.clear
+  val tuBusy = tus.map(_.io.busy)
+  val anyBusy = tuBusy.reduce(_ || _) || tc.io.out.valid
+  def ev(b: Bool): UInt = b.asUInt.pad(8)
+  def delta(x: UInt): UInt = { val prev = RegNext(x, 0.U); (x - prev)(7, 0) }
+  val events = Map(
+    "cycles" -> 1.U(8.W), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
+    "node_requests" -> delta(mc.io.nodeRequests), "leaf_requests" -> delta(mc.io.leafRequests),
+    "prim_requests" -> delta(mc.io.primRequests), "mem_bytes" -> delta(mc.io.bytesRequested),
+    "mem_busy_beats" -> delta(mc.io.busyBeats),
+    "stall_iu_arbitration" -> PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready)).pad(8),
+    "stall_memory_request" -> ev(mc.io.axi.ar.valid && !mc.io.axi.ar.ready),
+    "stall_memory_data" -> ev(iu.io.mem.resp.ready && !iu.io.mem.resp.valid),
+    "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
+    "tu_busy_cycles" -> PopCount(tuBusy).pad(8))
+  for ((n, i) <- RtAccelTop.counterNames.zipWithIndex) perf.io.events(i) := events(n)
+  regs.io.counters := perf.io.values
+}

@@ -1,0 +1,122 @@
+package rtaccel.tu
+
+import chisel3._
+import chisel3.util._
+import rtaccel.config.PlatformParams
+import rtaccel.fp.{Fp, FpFormat}
+import rtaccel.iu.{BoxResult, IuReq, RayData, TriResult}
+
+/** A ray handed to a TU: its id, the prepared ray (with 1/d) and tmax. */
+class TuRay(p: PlatformParams) extends Bundle {
+  val id = UInt(32.W)
+  val ray = new RayData
+  val tmax = UInt(32.W)
+}
+
+/** Closest hit of one ray; prim = -1 and t = +inf on a miss; overflow = the stack was too shallow. */
+class TuResult extends Bundle {
+  val id = UInt(32.W)
+  val t = UInt(32.W)
+  val prim = UInt(32.W)
+  val u = UInt(32.W)
+  val v = UInt(32.W)
+  val overflow = Bool()
+}
+
+/** Traversal unit (paper Section 4): control flow and the traversal stack of one ray, in exactly the order
+  * of rtaccel.model.Traversal (docs/architecture.md, "Traversal order"):
+  * issue the current ref to the IU; for a node, rank the hit children by entry distance (stable by slot),
+  * descend into the nearest and push the others far-first; for a leaf, keep the closest hit (t < tmax);
+  * then pop, discarding entries whose entry distance is beyond tmax.
+  * A push onto a full stack is dropped and the ray is flagged `overflow` (reported, never silently wrong).
+  */
+class TraversalUnit(p: PlatformParams, index: Int) extends Module {
+  val io = IO(new Bundle {
+    val ray = Flipped(Decoupled(new TuRay(p)))
+    val req = Decoupled(new IuReq(p))
+    val box = Flipped(Valid(new BoxResult(p)))
+    val tri = Flipped(Valid(new TriResult(p)))
+    val result = Decoupled(new TuResult)
+    val busy = Output(Bool())
+  })
+  private val f = FpFormat.fp32
+  private val inf = "h7f800000".U(32.W)
+
+  object S extends ChiselEnum { val idle, issue, waitBox, push, waitTri, pop, done = Value }
+  val state = RegInit(S.idle)
+  val r = Reg(new TuRay(p))
+  val cur = Reg(UInt(32.W))
+  val tmax = Reg(UInt(32.W))
+  val best = Reg(new TuResult)
+  val overflow = Reg(Bool())
+  class Entry extends Bundle { val cref = UInt(32.W); val t = UInt(32.W) }
+  val stack = Mem(p.stackDepth, new Entry)
+  val sp = RegInit(0.U(log2Ceil(p.stackDepth + 1).W))
+  val sorted = Reg(Vec(p.m, new Entry))
+  val pushIdx = Reg(UInt(log2Ceil(p.m + 1).W))
+
+  io.ray.ready := state === S.idle
+  io.busy := state =/= S.idle
+  when(io.ray.fire) {
+    r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B
+    best.id := io.ray.bits.id; best.t := inf; best.prim := "hffffffff".U; best.u := 0.U; best.v := 0.U
+    sp := 0.U
+    state := S.issue
+  }
+
+  io.req.valid := state === S.issue
+  io.req.bits.tu := index.U
+  io.req.bits.cref := cur
+  io.req.bits.tmax := tmax
+  io.req.bits.ray := r.ray
+  when(io.req.fire) { state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox) }
+
+  // Node: stable rank of each hit child = hit children nearer, or equally near in an earlier slot.
+  when(state === S.waitBox && io.box.valid && io.box.bits.tu === index.U) {
+    val b = io.box.bits
+    val ranks = (0 until p.m).map { j =>
+      PopCount((0 until p.m).filter(_ != j).map { i =>
+        if (i < j) b.hit(i) && !Fp.gt(f, b.tnear(i), b.tnear(j)) else b.hit(i) && Fp.gt(f, b.tnear(j), b.tnear(i))
+      })
+    }
+    for (j <- 0 until p.m) when(b.hit(j)) {
+      sorted(ranks(j)).cref := b.cref(j); sorted(ranks(j)).t := b.tnear(j)
+    }
+    val k = PopCount(b.hit)
+    when(k === 0.U) { state := S.pop }
+      .otherwise {
+        cur := b.cref(PriorityMux(Seq.tabulate(p.m)(j => (b.hit(j) && ranks(j) === 0.U) -> j.U)))
+        pushIdx := k - 1.U
+        state := Mux(k === 1.U, S.issue, S.push)
+      }
+  }
+  when(state === S.push) { // far first: sorted(k-1) down to sorted(1)
+    when(sp === p.stackDepth.U) { overflow := true.B }
+      .otherwise { stack(sp) := sorted(pushIdx); sp := sp + 1.U }
+    pushIdx := pushIdx - 1.U
+    when(pushIdx === 1.U) { state := S.issue }
+  }
+
+  // Leaf: results arrive in slot order; an earlier equal t is kept.
+  when(state === S.waitTri && io.tri.valid && io.tri.bits.tu === index.U) {
+    val t = io.tri.bits
+    when(t.hit && Fp.lt(f, t.t, tmax)) {
+      tmax := t.t; best.t := t.t; best.prim := t.prim; best.u := t.u; best.v := t.v
+    }
+    when(t.last) { state := S.pop }
+  }
+
+  when(state === S.pop) {
+    when(sp === 0.U) { state := S.done }
+      .otherwise {
+        val top = stack(sp - 1.U)
+        sp := sp - 1.U
+        when(!Fp.gt(f, top.t, tmax)) { cur := top.cref; state := S.issue }
+      }
+  }
+
+  io.result.valid := state === S.done
+  io.result.bits := best
+  io.result.bits.overflow := overflow
+  when(io.result.fire) { state := S.idle }
+}
