@@ -26,7 +26,7 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace check analyze bench clean \
-        verilog lint simulate
+        verilog lint simulate regress paper-nocache
 
 help:
 	@echo "make run | test | golden | trace | check | analyze | bench   (see README.md)"
@@ -117,6 +117,20 @@ simulate: deps
 	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
 	  OUT=$${OUT:-build/simulate/$$(basename $(SCENE))}; T=$(TRIS) && \
 	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT --config $(CONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) $(SIM_ARGS)
+
+regress: deps
+	RTACCEL_REGRESS=full $(SBT) "testOnly rtaccel.top.PlatformSpec"
+
+# Paper Figs 12-13 without cache: rays/s and memory utilisation vs TUs (CSV + PNG in build/paper-nocache).
+NOCACHE_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
+NOCACHE_TUS ?= 1,2,4,8,16,32
+paper-nocache: deps
+	@mkdir -p build/paper-nocache; csvs=""; for s in $(NOCACHE_SCENES); do \
+	  [ -f "$$s" ] || { echo "[paper-nocache] skip $$s (absent)"; continue; }; n=$$(basename $$s .obj); d=build/paper-nocache/$$n; \
+	  [ -f $$d/golden/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$d/golden WIDTH=32 HEIGHT=24 >/dev/null || exit $$?; \
+	  T=$$(tools/tris $$s); $(JAVA) rtaccel.cli.SweepTus --tris "$$T" --scene-label $$s --rays $$d/golden/rays.npy --out $$d \
+	    --config paper2017 --m $(M) --mppl $(MPPL) --tus-list $(NOCACHE_TUS) || exit $$?; csvs="$$csvs $$d/tus_sweep.csv"; done; \
+	  [ -z "$$csvs" ] || $(PY) -m dse.plot_tus build/paper-nocache/tus_sweep.png $$csvs
 
 # ---------------------------------------------------------------- tests
 FIXTURE_SCENES := cornell hairball soup extreme

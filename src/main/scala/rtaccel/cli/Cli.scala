@@ -15,7 +15,10 @@ object Cli {
     try { body(Args.parse(args)); 0 }
     catch {
       case e: InputError => Console.err.println(s"error: ${e.getMessage}"); 2
-      case e: IllegalArgumentException => Console.err.println(s"error: ${e.getMessage.stripPrefix("requirement failed: ")}"); 2
+      case e: IllegalArgumentException =>
+        Console.err.println(s"error: ${e.getMessage.stripPrefix("requirement failed: ")}")
+        if (sys.env.contains("RTACCEL_DEBUG")) e.printStackTrace()
+        2
     }
     finally System.out.flush()
 

@@ -15,8 +15,12 @@ object EmitVerilog {
     val p = p0.copy(name = cfg)
     val out = Paths.get(a.get("out", s"build/$cfg"))
     Files.createDirectories(out)
-    val firtoolOpts = Array("-disable-all-randomization", "-strip-debug-info", "--split-verilog", "-o", out.toString)
-    _root_.circt.stage.ChiselStage.emitSystemVerilog(new RtAccelTop(p), Array("--target-dir", out.toString), firtoolOpts)
+    // randomization off and debug info stripped: the output is for synthesis and lint, not for simulation
+    new _root_.circt.stage.ChiselStage().execute(
+      Array("--target-dir", out.toString, "--target", "systemverilog", "--split-verilog") ++
+        (if (sys.env.contains("RTACCEL_DEBUG")) Array("--full-stacktrace") else Array[String]()),
+      Seq(chisel3.stage.ChiselGeneratorAnnotation(() => new RtAccelTop(p)),
+        _root_.circt.stage.FirtoolOption("-disable-all-randomization"), _root_.circt.stage.FirtoolOption("-strip-debug-info")))
     val files = Files.list(out).toArray.map(_.toString).filter(f => f.endsWith(".sv") || f.endsWith(".v")).sorted
     System.err.println(s"[verilog] ${files.length} files in $out (config ${p.name}: ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}, stack ${p.stackDepth})")
     println(ujson.write(ujson.Obj("config" -> p.name, "out" -> out.toString, "files" -> files.length, "top" -> "RtAccelTop")))

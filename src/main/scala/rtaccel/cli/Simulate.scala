@@ -3,6 +3,7 @@ package rtaccel.cli
 import java.nio.file.{Files, Path, Paths}
 import chisel3._
 import chiseltest._
+import chiseltest.internal.CachingAnnotation
 import chiseltest.simulator.{VerilatorBackendAnnotation, VerilatorCFlags}
 import firrtl2.options.TargetDirAnnotation
 import rtaccel.bvh.MemoryImage
@@ -30,32 +31,53 @@ object Simulate {
     println(ujson.write(o.json))
   }
 
+  /** Options of one run that do not change the platform. */
+  final case class SimOptions(label: String, memJitter: Int = 0, hostStall: Int = 0, seed: Int = 1,
+                              work: String = "build/sim", maxCycles: Option[Long] = None, scaleExp: Int = 0)
+
   def run(a: Args): Outcome = {
     val (scene, rays, scaleExp) = Cli.inputs(a)
     val b = Cli.build(scene, Cli.params(a), Cli.fitRequested(a))
+    run(b, rays, SimOptions(a.get("scene-label", a.need("tris")), a.int("mem-jitter", 0), a.int("host-stall", 0),
+      a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp))
+  }
+
+  /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
+  def run(b: Cli.Built, rays: Rays, o: SimOptions): Outcome = {
     val p = b.params
     val img = MemoryImage.pack(b.bvh, b.scene, p)
     val stats = new RayStats
     val model = new Traversal(img).traceAll(rays, AccessSink.none, stats)
-    val label = a.get("scene-label", a.need("tris"))
-    val work = Paths.get(a.get("work", "build/sim")).resolve(s"${Paths.get(label).getFileName}-${p.name}-tus${p.tus}-m${p.m}-mppl${p.mppl}")
-    Files.createDirectories(work)
+    val label = o.label
     val axi = AxiParams(dataBits = p.axiDataBits)
-    val layout = ImageFile.write(img, axi, work.resolve("image.hex"))
-    RaysFile.write(rays, work.resolve("rays.hex"))
     val den = 1000
     val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
-      bytesPerCycleDen = den, randomExtraLatency = a.int("mem-jitter", 0), seed = a.int("seed", 1))
-    val setup = SimSetup(rays.count, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
-      layout.words, layout.primBaseBytes, dram, hostStallPercent = a.int("host-stall", 0), seed = a.int("seed", 1))
-    val maxCycles = a.opt("max-cycles").map(_.toLong).getOrElse(1000000L + 200000L * rays.count)
+      bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed)
+    // One folder per simulator build: everything that changes the circuit is in its name.
+    val imageBytes = img.numNodes.toLong * p.nodeStrideBytes + 4096 + img.numPrims.toLong * p.primStrideBytes
+    val rayCap = SimSetup.pow2(rays.count); val wordCap = SimSetup.pow2((imageBytes + axi.beatBytes - 1) / axi.beatBytes)
+    val r = p.refs
+    val key = s"tus${p.tus}-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
+      s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
+      s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}"
+    val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
+    Files.createDirectories(work)
+    val layout = ImageFile.write(img, axi, work.resolve("image.hex"))
+    require(layout.words <= wordCap, s"image of ${layout.words} words exceeds the simulator's $wordCap")
+    RaysFile.write(rays, work.resolve("rays.hex"))
+    val setup = SimSetup(rayCap, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
+      wordCap, dram, hostStallPercent = o.hostStall, seed = o.seed)
+    val maxCycles = o.maxCycles.getOrElse(1000000L + 200000L * rays.count)
     System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build in $work")
 
     var result: Outcome = null
     val t0 = System.nanoTime()
     RawTester.test(new SimHarness(p, setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
-      VerilatorCFlags(Seq("-O1")))) { dut =>
+      VerilatorCFlags(Seq("-O1")), CachingAnnotation)) { dut =>
       dut.clock.setTimeout(0)
+      dut.io.rayCount.poke(rays.count.U)
+      dut.io.primBase.poke(layout.primBaseBytes.U)
+      dut.io.readIdx.poke(0.U); dut.io.regAddr.poke(0.U)
       val tSim = System.nanoTime()
       var stepped = 0L
       val chunk = 20000
@@ -96,7 +118,7 @@ object Simulate {
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond
       val json = ujson.Obj(
-        "rays" -> rays.count, "cycles" -> cycles, "clock_mhz" -> p.clockMhz,
+        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz,
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
         "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
@@ -105,9 +127,9 @@ object Simulate {
         "sim_cycles_per_wall_s" -> stepped / simWall,
         "scene" -> label, "config" -> p.name, "tus" -> p.tus, "m" -> p.m, "mppl" -> p.mppl,
         "stack_overflow_rays" -> overflow, "model_stack_overflow_rays" -> stats.overflows,
-        "node_requests" -> counters("node_requests"), "model_node_fetches" -> stats.nodeFetches,
-        "prim_requests" -> counters("prim_requests"), "model_prim_tests" -> stats.primTests,
-        "timed_out" -> (received < rays.count), "normalize_exponent" -> scaleExp,
+        "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
+        "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,
+        "timed_out" -> (received < rays.count), "normalize_exponent" -> o.scaleExp,
         "mem_jitter" -> dram.randomExtraLatency, "host_stall_percent" -> setup.hostStallPercent,
         "counters" -> ujson.Obj.from(counters.map { case (k, v) => k -> ujson.Num(v.toDouble) }),
         "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> Cli.version)

@@ -30,17 +30,28 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, maxOutstanding: Int = 1
   // ---- arbitration and issue: a request goes to memory and its context to the job FIFO together
   val arb = Module(new RRArbiter(new IuReq(p), p.tus))
   arb.io.in <> io.req
-  val jobs = Module(new Queue(new IuReq(p), maxOutstanding))
+  class Job extends Bundle {
+    val tu = UInt(p.tuBits.W)
+    val isLeaf = Bool()
+    val lastPrim = UInt(math.max(1, p.refs.countBits).W) // primitive count - 1
+    val tmax = UInt(32.W)
+    val ray = new RayData
+  }
+  val jobs = Module(new Queue(new Job, maxOutstanding))
+  val r = arb.io.out.bits
   io.mem.req.valid := arb.io.out.valid && jobs.io.enq.ready
-  io.mem.req.bits.cref := arb.io.out.bits.cref
+  io.mem.req.bits.childRef := r.cref
   jobs.io.enq.valid := arb.io.out.valid && io.mem.req.ready
-  jobs.io.enq.bits := arb.io.out.bits
+  jobs.io.enq.bits.tu := r.tu
+  jobs.io.enq.bits.isLeaf := r.cref(primFlagBit)
+  jobs.io.enq.bits.lastPrim := (if (p.refs.countBits == 0) 0.U else r.cref(p.refs.primIndexBits + p.refs.countBits - 1, p.refs.primIndexBits))
+  jobs.io.enq.bits.tmax := r.tmax
+  jobs.io.enq.bits.ray := r.ray
   arb.io.out.ready := io.mem.req.ready && jobs.io.enq.ready
 
   // ---- collection: beats in request order become whole nodes or whole primitives
   val job = jobs.io.deq.bits
-  val isLeaf = job.cref(primFlagBit)
-  val primCount = ((job.cref >> p.refs.primIndexBits) & ((1 << p.refs.countBits) - 1).U) +& 1.U
+  val isLeaf = job.isLeaf
   val buf = Reg(Vec(math.max(nodeWords, primWords), UInt(32.W)))
   val beatIdx = RegInit(0.U(8.W))
   val primIdx = RegInit(0.U(8.W))
@@ -48,7 +59,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, maxOutstanding: Int = 1
   val unitBeats = Mux(isLeaf, (primWords / beatWords).U, (nodeWords / beatWords).U)
   val beatFire = io.mem.resp.fire
   val unitDone = beatFire && beatIdx === unitBeats - 1.U
-  val jobDone = unitDone && (!isLeaf || primIdx === primCount - 1.U)
+  val jobDone = unitDone && (!isLeaf || primIdx === job.lastPrim)
   // the words of the unit as they will be once this beat is stored (the last beat goes straight through)
   val words = Wire(Vec(buf.length, UInt(32.W)))
   for (w <- buf.indices) {

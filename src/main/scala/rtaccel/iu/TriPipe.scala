@@ -71,7 +71,7 @@ class TriPipe(p: PlatformParams) extends Module {
   div.io.in.bits.a := one
   div.io.in.bits.b := s6(0)
   val s7 = ShiftRegister(s6, p.divStages); val j7 = ShiftRegister(j6, p.divStages)
-  val v7 = ShiftRegister(v6, p.divStages, false.B, true.B)
+  val v7 = div.io.out.valid
   val inv = div.io.out.bits
   // stage 8: u, v, t
   val det8 = RegNext(s7(0))

@@ -7,11 +7,19 @@ import chisel3.util.random.LFSR
 import rtaccel.config.PlatformParams
 import rtaccel.top.{RegMap, RtAccelTop}
 
-/** What a simulation run needs besides the platform parameters. */
-final case class SimSetup(rayCount: Int, raysHex: String, imageHex: String, imageWords: Int, primBaseBytes: Long,
+/** What a simulation build needs besides the platform parameters. Capacities are powers of two and the
+  * files live at fixed names in one folder, so that scenes of similar size reuse a compiled simulator; the
+  * ray count and the primitive base address are inputs, not parameters, for the same reason.
+  */
+final case class SimSetup(rayCapacity: Int, raysHex: String, imageHex: String, imageWords: Int,
                           dram: DramConfig, hostStallPercent: Int = 0, seed: Int = 1) {
-  require(rayCount >= 1, "a simulation needs at least one ray")
+  require(rayCapacity >= 1 && Integer.bitCount(rayCapacity) == 1, "ray capacity must be a power of two")
+  require(imageWords >= 1 && Integer.bitCount(imageWords) == 1, "image capacity must be a power of two")
   require(hostStallPercent >= 0 && hostStallPercent < 100, "host stall percentage must be 0..99")
+}
+
+object SimSetup {
+  def pow2(n: Long): Int = { var c = 1L; while (c < n) c <<= 1; require(c <= (1 << 30), s"$n entries is too large to simulate"); c.toInt }
 }
 
 /** Simulation-only wrapper: the board top with the rays in a ROM, the memory image in a DRAM model and the
@@ -20,6 +28,8 @@ final case class SimSetup(rayCount: Int, raysHex: String, imageHex: String, imag
   */
 class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   val io = IO(new Bundle {
+    val rayCount = Input(UInt(32.W))
+    val primBase = Input(UInt(64.W))
     val received = Output(UInt(32.W))
     val sent = Output(UInt(32.W))
     val doneCycle = Output(UInt(64.W)) // cycles until the last hit arrived (counting stops there)
@@ -36,29 +46,29 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   started := true.B
   top.io.regs.wr.valid := !started
   top.io.regs.wr.bits.addr := RegMap.PrimBase.U
-  top.io.regs.wr.bits.data := s.primBaseBytes.U
+  top.io.regs.wr.bits.data := io.primBase
   top.io.regs.rdAddr := io.regAddr
   io.regData := top.io.regs.rdData
 
-  val rays = Mem(s.rayCount, UInt(RtAccelTop.RayBits.W))
+  val rays = Mem(s.rayCapacity, UInt(RtAccelTop.RayBits.W))
   loadMemoryFromFileInline(rays, s.raysHex)
   val sent = RegInit(0.U(32.W))
-  top.io.rays.valid := started && sent < s.rayCount.U
+  top.io.rays.valid := started && sent < io.rayCount
   top.io.rays.bits.tdata := rays(sent)
-  top.io.rays.bits.tlast := sent === (s.rayCount - 1).U
+  top.io.rays.bits.tlast := sent === io.rayCount - 1.U
   when(top.io.rays.fire) { sent := sent + 1.U }
 
-  val hits = Mem(s.rayCount, UInt(RtAccelTop.HitBits.W))
+  val hits = Mem(s.rayCapacity, UInt(RtAccelTop.HitBits.W))
   val received = RegInit(0.U(32.W))
   val lfsr = LFSR(16, seed = Some(s.seed & 0xffff | 1))
   val stall = if (s.hostStallPercent == 0) false.B else (lfsr(6, 0) < (s.hostStallPercent * 128 / 100).U)
   top.io.hits.ready := !stall
   when(top.io.hits.fire) {
-    when(received < s.rayCount.U) { hits(received) := top.io.hits.bits.tdata }
+    when(received < io.rayCount) { hits(received) := top.io.hits.bits.tdata }
     received := received + 1.U
   }
   val cycle = RegInit(0.U(64.W))
-  when(received < s.rayCount.U) { cycle := cycle + 1.U }
+  when(received < io.rayCount) { cycle := cycle + 1.U }
   io.doneCycle := cycle
   io.received := received
   io.sent := sent

@@ -38,7 +38,7 @@ class TraversalController(p: PlatformParams) extends Module {
     divs(a).io.in.bits.b := io.in.bits.f(3 + a)
   }
   val rayDelayed = ShiftRegister(io.in.bits, lat)
-  val outValid = divs(0).io.out.valid
+  val outValid = divs.map(_.io.out.valid).reduce(_ && _) // the three run in lockstep
   inFlight := inFlight + io.in.fire.asUInt - outValid.asUInt
   prepared.io.enq.valid := outValid
   prepared.io.enq.bits.id := rayDelayed.id

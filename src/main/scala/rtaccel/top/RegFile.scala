@@ -11,7 +11,7 @@ class RegPort extends Bundle {
 }
 
 /** Register map (also in docs/platform.md):
-  *  0x00 magic "RTAC" + version   0x01 configuration (M, MPPL, TUs, stack depth)   0x02 primitive base (RW)
+  *  0x00 magic "RTAC" + version   0x01 configuration (M, max primitives per leaf, TUs, stack depth)   0x02 primitive base (RW)
   *  0x03 control (RW, bit 0 clears the counters)   0x10.. performance counters (read only, 64-bit).
   */
 object RegMap {

@@ -19,9 +19,12 @@ object RtAccelTop {
   val RayBits = 9 * 32
   /** Hit beat: 6 words: id, t, prim, u, v, flags (bit 0 = stack overflow). */
   val HitBits = 6 * 32
-  val counterNames: Seq[String] = Seq("cycles", "busy_cycles", "rays_in", "hits_out", "node_requests",
-    "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats", "stall_iu_arbitration", "stall_memory_request",
-    "stall_memory_data", "stall_host_backpressure", "tu_busy_cycles")
+  /** Counted here, per cycle. */
+  val eventNames: Seq[String] = Seq("cycles", "busy_cycles", "rays_in", "hits_out", "stall_iu_arbitration",
+    "stall_memory_request", "stall_memory_data", "stall_host_backpressure", "tu_busy_cycles")
+  /** Counted by the memory controller (not cleared by the control register). */
+  val memoryNames: Seq[String] = Seq("node_requests", "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats")
+  val counterNames: Seq[String] = eventNames ++ memoryNames
 }
 
 /** Board top (paper Fig 1, with the PCIe communication controller replaced by AXI4-Stream): rays in, hits
@@ -36,10 +39,11 @@ class RtAccelTop(p: PlatformParams) extends Module {
     val regs = new RegPort
   })
   val tc = Module(new TraversalController(p))
-  val tus = Seq.tabulate(p.tus)(i => Module(new TraversalUnit(p, i)))
+  val tus = Seq.fill(p.tus)(Module(new TraversalUnit(p)))
   val iu = Module(new IntersectionUnit(p, axiP.dataBits))
   val mc = Module(new MemoryController(p, axiP))
-  val configWord = BigInt(p.m) | (BigInt(p.mppl) << 8) | (BigInt(p.tus) << 16) | (BigInt(p.stackDepth) << 32)
+  // generator parameters only (MPPL is a property of the memory image, not of the circuit)
+  val configWord = BigInt(p.m) | (BigInt(p.refs.maxLeafPrims) << 8) | (BigInt(p.tus) << 16) | (BigInt(p.stackDepth) << 32)
   val regs = Module(new RegFile(configWord, RtAccelTop.counterNames))
   regs.io.port <> io.regs
 
@@ -50,11 +54,12 @@ class RtAccelTop(p: PlatformParams) extends Module {
   io.rays.ready := tc.io.in.ready
   io.hits.valid := tc.io.out.valid
   val h = tc.io.out.bits
-  io.hits.bits.tdata := Cat(h.overflow.asUInt.pad(32), h.v, h.u, h.prim, h.t, h.id)
+  io.hits.bits.tdata := Cat(0.U(31.W), h.overflow, h.v, h.u, h.prim, h.t, h.id)
   io.hits.bits.tlast := false.B
   tc.io.out.ready := io.hits.ready
 
   for ((tu, i) <- tus.zipWithIndex) {
+    tu.io.index := i.U
     tu.io.ray <> tc.io.tuRay(i)
     tc.io.tuResult(i) <> tu.io.result
     iu.io.req(i) <> tu.io.req
@@ -67,22 +72,19 @@ class RtAccelTop(p: PlatformParams) extends Module {
   io.mem <> mc.io.axi
 
   // counters
-  val perf = Module(new PerfCounters(RtAccelTop.counterNames))
+  val perf = Module(new PerfCounters(RtAccelTop.eventNames))
   perf.io.clear := regs.io.clear
   val tuBusy = tus.map(_.io.busy)
   val anyBusy = tuBusy.reduce(_ || _) || tc.io.out.valid
-  def ev(b: Bool): UInt = b.asUInt.pad(8)
-  def delta(x: UInt): UInt = { val prev = RegNext(x, 0.U); (x - prev)(7, 0) }
+  def ev(b: UInt): UInt = 0.U(8.W) | b // widen to the counters' 8-bit increment (works for Bool too)
   val events = Map(
     "cycles" -> 1.U(8.W), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
-    "node_requests" -> delta(mc.io.nodeRequests), "leaf_requests" -> delta(mc.io.leafRequests),
-    "prim_requests" -> delta(mc.io.primRequests), "mem_bytes" -> delta(mc.io.bytesRequested),
-    "mem_busy_beats" -> delta(mc.io.busyBeats),
-    "stall_iu_arbitration" -> PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready)).pad(8),
+    "stall_iu_arbitration" -> ev(PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready))),
     "stall_memory_request" -> ev(mc.io.axi.ar.valid && !mc.io.axi.ar.ready),
     "stall_memory_data" -> ev(iu.io.mem.resp.ready && !iu.io.mem.resp.valid),
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
-    "tu_busy_cycles" -> PopCount(tuBusy).pad(8))
-  for ((n, i) <- RtAccelTop.counterNames.zipWithIndex) perf.io.events(i) := events(n)
-  regs.io.counters := perf.io.values
+    "tu_busy_cycles" -> ev(PopCount(tuBusy)))
+  for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := events(n)
+  regs.io.counters := VecInit(perf.io.values ++ Seq(mc.io.nodeRequests, mc.io.leafRequests, mc.io.primsRequested,
+    mc.io.bytesRequested, mc.io.busyBeats).map(_.pad(64)))
 }

@@ -30,7 +30,7 @@ class TuResult extends Bundle {
   * then pop, discarding entries whose entry distance is beyond tmax.
   * A push onto a full stack is dropped and the ray is flagged `overflow` (reported, never silently wrong).
   */
-class TraversalUnit(p: PlatformParams, index: Int) extends Module {
+class TraversalUnit(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
     val ray = Flipped(Decoupled(new TuRay(p)))
     val req = Decoupled(new IuReq(p))
@@ -38,7 +38,9 @@ class TraversalUnit(p: PlatformParams, index: Int) extends Module {
     val tri = Flipped(Valid(new TriResult(p)))
     val result = Decoupled(new TuResult)
     val busy = Output(Bool())
+    val index = Input(UInt(p.tuBits.W)) // a port, not a parameter, so that every TU is one module
   })
+  private val index = io.index
   private val f = FpFormat.fp32
   private val inf = "h7f800000".U(32.W)
 
@@ -53,7 +55,7 @@ class TraversalUnit(p: PlatformParams, index: Int) extends Module {
   val stack = Mem(p.stackDepth, new Entry)
   val sp = RegInit(0.U(log2Ceil(p.stackDepth + 1).W))
   val sorted = Reg(Vec(p.m, new Entry))
-  val pushIdx = Reg(UInt(log2Ceil(p.m + 1).W))
+  val pushIdx = Reg(UInt(log2Ceil(p.m).W))
 
   io.ray.ready := state === S.idle
   io.busy := state =/= S.idle
@@ -65,14 +67,14 @@ class TraversalUnit(p: PlatformParams, index: Int) extends Module {
   }
 
   io.req.valid := state === S.issue
-  io.req.bits.tu := index.U
+  io.req.bits.tu := index
   io.req.bits.cref := cur
   io.req.bits.tmax := tmax
   io.req.bits.ray := r.ray
   when(io.req.fire) { state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox) }
 
   // Node: stable rank of each hit child = hit children nearer, or equally near in an earlier slot.
-  when(state === S.waitBox && io.box.valid && io.box.bits.tu === index.U) {
+  when(state === S.waitBox && io.box.valid && io.box.bits.tu === index) {
     val b = io.box.bits
     val ranks = (0 until p.m).map { j =>
       PopCount((0 until p.m).filter(_ != j).map { i =>
@@ -85,7 +87,7 @@ class TraversalUnit(p: PlatformParams, index: Int) extends Module {
     val k = PopCount(b.hit)
     when(k === 0.U) { state := S.pop }
       .otherwise {
-        cur := b.cref(PriorityMux(Seq.tabulate(p.m)(j => (b.hit(j) && ranks(j) === 0.U) -> j.U)))
+        cur := Mux1H(Seq.tabulate(p.m)(j => (b.hit(j) && ranks(j) === 0.U) -> b.cref(j))) // exactly one hit child has rank 0
         pushIdx := k - 1.U
         state := Mux(k === 1.U, S.issue, S.push)
       }
@@ -98,7 +100,7 @@ class TraversalUnit(p: PlatformParams, index: Int) extends Module {
   }
 
   // Leaf: results arrive in slot order; an earlier equal t is kept.
-  when(state === S.waitTri && io.tri.valid && io.tri.bits.tu === index.U) {
+  when(state === S.waitTri && io.tri.valid && io.tri.bits.tu === index) {
     val t = io.tri.bits
     when(t.hit && Fp.lt(f, t.t, tmax)) {
       tmax := t.t; best.t := t.t; best.prim := t.prim; best.u := t.u; best.v := t.v

@@ -1,0 +1,48 @@
+"""python -m dse.plot_tus OUT CSV [CSV ...] — paper Figs 12-13: rays/s and memory utilisation vs TUs.
+
+Each CSV is a `tus_sweep.csv` of one scene (rtaccel.cli.SweepTus); its `#` provenance line labels the curve.
+"""
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def read(path):
+    lines = Path(path).read_text().splitlines()
+    prov = [l[1:].strip() for l in lines if l.startswith("#")]
+    rows = [l for l in lines if l and not l.startswith("#")]
+    data = np.genfromtxt(rows, delimiter=",", names=True)
+    scene = dict(kv.split("=", 1) for kv in prov[0].split() if "=" in kv).get("scene", path) if prov else path
+    return Path(scene).stem, data, prov
+
+
+def main(out, *csvs):
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
+    footer = []
+    for c in csvs:
+        name, d, prov = read(c)
+        a1.plot(d["tus"], d["rays_per_s"], "o-", label=name)
+        a2.plot(d["tus"], 100 * d["mem_utilisation"], "o-", label=name)
+        footer += prov
+    for ax, title, yl in ((a1, "rays/s at 150 MHz (no cache)", "rays/s"), (a2, "memory utilisation (of peak)", "%")):
+        ax.set_xscale("log", base=2)
+        ax.set_xlabel("traversal units")
+        ax.set_ylabel(yl)
+        ax.set_title(title)
+        ax.grid(True, alpha=0.3)
+        ax.legend()
+    fig.text(0.01, 0.005, "\n".join(footer), fontsize=6, va="bottom")
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
+    fig.savefig(out, dpi=120)
+    print(f"[plot] {out}")
+
+
+if __name__ == "__main__":
+    if len(sys.argv) < 3:
+        raise SystemExit("error: usage: python -m dse.plot_tus OUT.png CSV [CSV ...]")
+    main(*sys.argv[1:])

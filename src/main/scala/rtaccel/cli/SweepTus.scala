@@ -1,0 +1,39 @@
+package rtaccel.cli
+
+import rtaccel.io.InputError
+
+/** Paper Figs 12-13: rays/s and memory utilisation vs the number of TUs, one RTL simulation per TU count,
+  * every run checked against the reference model. Writes OUT/tus_sweep.csv (plotted by dse.plot_tus).
+  */
+object SweepTus {
+  def main(args: Array[String]): Unit = Cli.run(args) { a =>
+    val out = a.path("out")
+    val (scene, rays, e) = Cli.inputs(a)
+    val tusList = a.get("tus-list", "1,2,4,8,16,32").split(",").map(s => s.trim.toIntOption.getOrElse(
+      throw new InputError(s"--tus-list must be integers (got '$s')"))).toSeq
+    val base = Cli.params(a)
+    val label = a.get("scene-label", a.need("tris"))
+    val rows = tusList.map { t =>
+      val b = Cli.build(scene, base.copy(tus = t), Cli.fitRequested(a))
+      System.err.println(s"[sweep] $label: TUs=$t")
+      val j = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e)).json
+      if (j("mismatch_vs_model").num != 0 || j("lost").num != 0 || j("timed_out").bool)
+        throw new InputError(s"TUs=$t: the RTL disagrees with the model or did not finish: ${ujson.write(j)}")
+      j
+    }
+    val p = base
+    val sb = new StringBuilder(s"# scene=$label triangles=${scene.triangles} rays=${rays.count} config=${p.name} M=${p.m} " +
+      s"MPPL=${p.mppl} clock_mhz=${p.clockMhz} mem_bytes_per_s=${p.memory.bytesPerSecond} sustained=${p.memory.sustainedEfficiency} " +
+      s"node_cache=none rtaccel=${Cli.version}\n")
+    sb ++= "tus,rays,cycles,rays_per_s,mem_utilisation,node_bytes_per_ray,prim_bytes_per_ray,stall_memory_data,tu_busy_cycles,sim_cycles_per_wall_s\n"
+    for (j <- rows) {
+      def n(k: String) = j(k).num
+      def c(k: String) = j("counters")(k).num
+      sb ++= f"${n("tus")}%.0f,${n("rays")}%.0f,${n("cycles")}%.0f,${n("rays_per_s_at_clock")}%.1f,${n("mem_utilisation")}%.4f," +
+        f"${n("node_bytes_per_ray")}%.1f,${n("prim_bytes_per_ray")}%.1f,${c("stall_memory_data")}%.0f,${c("tu_busy_cycles")}%.0f,${n("sim_cycles_per_wall_s")}%.0f\n"
+    }
+    Cli.writeText(out.resolve("tus_sweep.csv"), sb.toString)
+    println(ujson.write(ujson.Obj("scene" -> label, "csv" -> out.resolve("tus_sweep.csv").toString,
+      "rays_per_s" -> ujson.Arr.from(rows.map(_("rays_per_s_at_clock"))), "mem_utilisation" -> ujson.Arr.from(rows.map(_("mem_utilisation"))))))
+  }
+}

@@ -1,0 +1,113 @@
+package rtaccel.iu
+
+import chisel3._
+import chiseltest._
+import chiseltest.simulator.VerilatorBackendAnnotation
+import org.scalatest.funsuite.AnyFunSuite
+import scala.util.Random
+import rtaccel.config.PlatformParams
+import rtaccel.model.{PreparedRay, RayBox, RayTriangle}
+
+/** The IU's box and triangle pipelines against the reference model's RayBox / RayTriangle, bit for bit,
+  * one job per cycle: random jobs mixed with the edge classes of docs/numerics.md.
+  */
+class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
+  private def bits(f: Float): BigInt = BigInt(java.lang.Float.floatToRawIntBits(f)) & 0xffffffffL
+  private val p = PlatformParams(tus = 4, m = 4)
+  private val rnd = new Random(42)
+  private val specials = Array(0f, -0f, 1f, -1f, Float.MinPositiveValue, -Float.MinPositiveValue, 1e-30f, 1e30f,
+    Float.PositiveInfinity, Float.NegativeInfinity, java.lang.Float.MIN_NORMAL, Float.MaxValue)
+  private def coord(): Float = rnd.nextInt(10) match {
+    case 0 => specials(rnd.nextInt(specials.length))
+    case 1 => rnd.nextInt(5) - 2f                          // small integers: exact ties, shared planes
+    case _ => (rnd.nextFloat() - 0.5f) * math.pow(2, rnd.nextInt(12) - 4).toFloat
+  }
+  private def ray(): (Array[Float], PreparedRay, Float) = {
+    val o = Array.fill(3)(if (rnd.nextInt(8) == 0) rnd.nextInt(3) - 1f else (rnd.nextFloat() - 0.5f) * 4)
+    val d = Array.fill(3)(if (rnd.nextInt(6) == 0) (if (rnd.nextBoolean()) 0f else -0f) else rnd.nextFloat() - 0.5f)
+    if (d.forall(_ == 0f)) d(0) = 1f
+    val tmin = if (rnd.nextInt(4) == 0) rnd.nextFloat() else 0f
+    val tmax = if (rnd.nextInt(3) == 0) tmin + rnd.nextFloat() * 3 else Float.PositiveInfinity
+    val r = new PreparedRay(o(0), o(1), o(2), d(0), d(1), d(2), tmin, tmax)
+    (o ++ d ++ Array(r.ix, r.iy, r.iz, tmin), r, tmax)
+  }
+  private def pokeRay(rd: RayData, f: Array[Float]): Unit = {
+    for (k <- 0 until 3) { rd.o(k).poke(bits(f(k)).U); rd.d(k).poke(bits(f(3 + k)).U); rd.inv(k).poke(bits(f(6 + k)).U) }
+    rd.tmin.poke(bits(f(9)).U)
+  }
+
+  test("box pipeline == RayBox on 20000 random and edge-case nodes (M=4), one per cycle") {
+    test(new BoxPipe(p)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+      val lat = 4
+      val expected = scala.collection.mutable.Queue[(Seq[Boolean], Seq[BigInt])]()
+      for (cycle <- 0 until 20000 + lat) {
+        if (cycle < 20000) {
+          val (rf, r, tmax) = ray()
+          val words = (0 until p.m).flatMap { c =>
+            val a = Array.fill(3)(coord()); val b = Array.fill(3)(coord())
+            val lo = a.zip(b).map(x => if (rnd.nextInt(10) == 0) x._1 else math.min(x._1, x._2))
+            val hi = a.zip(b).map(x => if (rnd.nextInt(10) == 0) x._2 else math.max(x._1, x._2))
+            (lo ++ hi).map(bits) :+ (if (rnd.nextInt(5) == 0) BigInt(0) else BigInt(c + 1))
+          }
+          dut.io.in.valid.poke(true.B); dut.io.in.bits.tu.poke(1.U); pokeRay(dut.io.in.bits.ray, rf)
+          dut.io.in.bits.tmax.poke(bits(tmax).U)
+          words.zipWithIndex.foreach { case (w, i) => dut.io.in.bits.words(i).poke(w.U) }
+          val res = (0 until p.m).map { c =>
+            def w(k: Int) = java.lang.Float.intBitsToFloat(words(7 * c + k).toInt)
+            val t = RayBox.test(r, tmax, w(0), w(1), w(2), w(3), w(4), w(5))
+            (!t.isNaN && words(7 * c + 6) != 0, bits(if (t.isNaN) 0f else t))
+          }
+          expected.enqueue((res.map(_._1), res.map(_._2)))
+        } else dut.io.in.valid.poke(false.B)
+        if (cycle >= lat) {
+          dut.io.out.valid.expect(true.B)
+          val (hit, tn) = expected.dequeue()
+          for (c <- 0 until p.m) {
+            dut.io.out.bits.hit(c).expect(hit(c).B, s"cycle $cycle child $c")
+            if (hit(c)) dut.io.out.bits.tnear(c).expect(tn(c).U, s"cycle $cycle child $c tnear")
+          }
+        }
+        dut.clock.step()
+      }
+    }
+  }
+
+  test("triangle pipeline == RayTriangle on 20000 random and degenerate primitives, one per cycle") {
+    test(new TriPipe(p)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+      val lat = TriPipe.latency(p)
+      val expected = scala.collection.mutable.Queue[(Boolean, Seq[BigInt], Boolean)]()
+      val out = new RayTriangle.Result
+      for (cycle <- 0 until 20000 + lat) {
+        if (cycle < 20000) {
+          val (rf, r, tmax) = ray()
+          val v = Array.fill(9)((rnd.nextFloat() - 0.5f) * 3)
+          rnd.nextInt(8) match {
+            case 0 => System.arraycopy(v, 0, v, 3, 3)                               // repeated vertex
+            case 1 => for (k <- 0 until 3) v(6 + k) = 2 * v(3 + k) - v(k)           // collinear
+            case 2 => for (k <- 0 until 9) v(k) = v(k) * 1e-20f                      // underflowing products
+            case 3 => for (k <- 0 until 9) v(k) = v(k) * 1e13f                       // overflowing products
+            case _ =>
+          }
+          dut.io.in.valid.poke(true.B); dut.io.in.bits.tu.poke(2.U); pokeRay(dut.io.in.bits.ray, rf)
+          dut.io.in.bits.tmax.poke(bits(tmax).U); dut.io.in.bits.last.poke((cycle % 3 == 0).B)
+          for (k <- 0 until 9) dut.io.in.bits.words(k).poke(bits(v(k)).U)
+          dut.io.in.bits.words(9).poke(cycle.U)
+          val hit = RayTriangle.test(r, tmax, v, out)
+          expected.enqueue((hit, Seq(bits(out.t), bits(out.u), bits(out.v)), cycle % 3 == 0))
+        } else dut.io.in.valid.poke(false.B)
+        if (cycle >= lat) {
+          dut.io.out.valid.expect(true.B)
+          val (hit, tuv, last) = expected.dequeue()
+          dut.io.out.bits.hit.expect(hit.B, s"cycle $cycle")
+          dut.io.out.bits.last.expect(last.B)
+          dut.io.out.bits.prim.expect((cycle - lat).U)
+          if (hit) {
+            dut.io.out.bits.t.expect(tuv(0).U, s"cycle $cycle t"); dut.io.out.bits.u.expect(tuv(1).U, s"cycle $cycle u")
+            dut.io.out.bits.v.expect(tuv(2).U, s"cycle $cycle v")
+          }
+        }
+        dut.clock.step()
+      }
+    }
+  }
+}

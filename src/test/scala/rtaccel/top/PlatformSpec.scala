@@ -1,0 +1,60 @@
+package rtaccel.top
+
+import org.scalatest.funsuite.AnyFunSuite
+import rtaccel.TestScenes
+import rtaccel.cli.{Cli, Simulate}
+import rtaccel.config.Presets
+import rtaccel.scene.{Rays, Scene}
+
+/** Whole-platform RTL (Verilator) against the reference model, ray by ray, bit for bit.
+  * `make test` runs a quick subset of the grid; `make regress` (RTACCEL_REGRESS=full) the whole
+  * TUs {1,2,4,8,32} x M {2,4,8} x MPPL {1,2,4,8,16}. The paper's fixed 32-bit reference layout is used so
+  * that MPPL changes only the memory image and a compiled simulator serves every MPPL.
+  */
+class PlatformSpec extends AnyFunSuite {
+  private val full = sys.env.get("RTACCEL_REGRESS").contains("full")
+  private val grid: Seq[(Int, Int, Seq[Int])] =
+    if (full) for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16))
+    else Seq((1, 4, Seq(1, 4, 16)), (4, 2, Seq(2, 8)), (2, 8, Seq(4)))
+
+  private val scene = TestScenes.soup(31, 400)
+  private val rays = {
+    val r = TestScenes.rays(32, 160).data
+    // Hand-made rays the golden exporter never produces: axis-parallel with signed zeros, a [tmin, tmax)
+    // window that cuts through the soup, origins exactly on vertices.
+    val extra = Seq(
+      Array(-1f, 5f, 5f, 1f, 0f, -0f, 0f, Float.PositiveInfinity),
+      Array(5f, 11f, 5f, -0f, -1f, 0f, 0f, Float.PositiveInfinity),
+      Array(5f, 5f, -1f, 0f, 0f, 1f, 3f, 7f),
+      Array(scene.v(0, 0, 0), scene.v(0, 0, 1), scene.v(0, 0, 2), 1f, 1f, 1f, 0f, Float.PositiveInfinity),
+      Array(scene.v(5, 1, 0), scene.v(5, 1, 1), scene.v(5, 1, 2), -1f, 0.5f, 0.25f, 1e-3f, 1e3f))
+    Rays(r ++ extra.flatten)
+  }
+
+  private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0) = {
+    val p = Presets.paper2017.copy(name = "paper2017", tus = tus, m = m, mppl = mppl, stackDepth = 64)
+    val b = Cli.build(scene, p, fit = false)
+    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall))
+    val j = o.json
+    info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +
+      f"mismatch ${j("mismatch_vs_model").num}%.0f lost ${j("lost").num}%.0f dup ${j("duplicated").num}%.0f")
+    assert(j("timed_out").bool == false, "the platform did not finish")
+    assert(j("mismatch_vs_model").num == 0 && j("lost").num == 0 && j("duplicated").num == 0, ujson.write(j))
+    assert(j("stack_overflow_rays").num == j("model_stack_overflow_rays").num)
+    assert(j("node_requests").num == j("model_node_fetches").num, "the RTL fetched a different number of nodes")
+    assert(j("prim_requests").num == j("model_prim_tests").num, "the RTL fetched a different number of primitives")
+    j
+  }
+
+  for ((tus, m, mppls) <- grid; mppl <- mppls)
+    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl") {
+      runOne(tus, m, mppl, rays, scene)
+    }
+
+  test("random memory latency and host backpressure change no result") {
+    val quiet = runOne(4, 4, 4, rays, scene)
+    val noisy = runOne(4, 4, 4, rays, scene, jitter = 37, stall = 40)
+    assert(noisy("cycles").num > quiet("cycles").num, "stalls must cost cycles")
+    assert(noisy("counters")("stall_host_backpressure").num > 0)
+  }
+}
