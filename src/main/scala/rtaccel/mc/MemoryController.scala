@@ -39,11 +39,9 @@ final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   * memReq:  reads this path wants from DRAM (a miss / fill); memResp: their beats, in memReq order,
   *          with `last` on the final beat of each memReq.
   * out:     the beats answering `in`, in `in` order, `last` on each request's final beat.
-  * Contract (for a cache that replaces the pass-through): memResp must be accepted without waiting for `out`
-  * to drain whenever this path's DRAM reads can be issued in a different order relative to the other path
-  * than their requests arrived (e.g. hits served ahead of misses); otherwise the shared in-order R channel
-  * can stall behind a response the MC's order mux is not yet asking for. The pass-through keeps memory
-  * order = global order and needs no buffer.
+  * A path may serve requests without DRAM (hits) and may issue its DRAM reads late, so DRAM order can differ
+  * from request order across the two paths. The MC then needs respBufferBeats > 0 (see MemoryController),
+  * which guarantees that every R beat has room to land and the shared in-order R channel never blocks.
   */
 class FetchPathIO(g: McGeometry) extends Bundle {
   val in = Flipped(Decoupled(g.memReq))
@@ -52,11 +50,22 @@ class FetchPathIO(g: McGeometry) extends Bundle {
   val out = Decoupled(new FetchBeat(g.axi.dataBits))
 }
 
-/** For now a pass-through: every request goes to DRAM, every beat straight back. */
-class FetchPath(g: McGeometry) extends Module {
+/** What the MC instantiates per path; a cache extends this and is passed to the MC as a factory. */
+abstract class FetchPathModule(val g: McGeometry) extends Module {
   val io = IO(new FetchPathIO(g))
+}
+
+/** For now a pass-through: every request goes to DRAM, every beat straight back. */
+class FetchPath(g: McGeometry) extends FetchPathModule(g) {
   io.memReq <> io.in
   io.out <> io.memResp
+}
+
+object FetchPath {
+  val Node = 0
+  val Prim = 1
+  /** The default factory: pass-through for both paths. */
+  val passThrough: (McGeometry, Int) => FetchPathModule = (g, _) => new FetchPath(g)
 }
 
 /** Splits reads into AXI4 INCR bursts of at most 256 beats that never cross a 4 KB boundary
@@ -114,9 +123,19 @@ class BurstSplitter(g: McGeometry, id: Int = 0) extends Module {
   * leave in global request order whatever the paths do. The paths' DRAM reads share one AXI AR port through
   * an arbiter; a second FIFO records which path each DRAM read belongs to and routes R beats back
   * (in-order AXI, one ID). Backpressure on io.resp reaches R.ready combinationally.
-  * Up to maxOutstanding requests may be in flight.
+  * Up to maxOutstanding requests may be in flight. pathFactory(g, FetchPath.Node | FetchPath.Prim) builds the
+  * two paths (default: pass-through); a cache is plugged in by passing a factory that returns it.
+  *
+  * respBufferBeats = 0 (default, enough for the pass-through paths, whose DRAM order is the request order):
+  * R beats go straight to their path and io.resp backpressure reaches R.ready combinationally.
+  * respBufferBeats > 0 (needed once a path can reorder DRAM traffic relative to the other, e.g. a cache):
+  * each path gets a response buffer of that many beats; a path's DRAM read is granted only if its buffer has
+  * room for all its beats (credits), so R never waits on the order mux and cannot deadlock; backpressure then
+  * stops AR issue instead of holding R.
   */
-class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 32) extends Module {
+class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 32,
+                       pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
+                       respBufferBeats: Int = 0) extends Module {
   val g = McGeometry(p, axi)
   private val ap = axi
   val io = IO(new Bundle {
@@ -131,8 +150,10 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     val busyBeats = Output(UInt(48.W))
   })
   val f = p.refs
-  private val NodePath = 0
-  private val PrimPath = 1
+  require(respBufferBeats == 0 || respBufferBeats >= g.maxBeats,
+    s"a response buffer of $respBufferBeats beats cannot hold the largest fetch (${g.maxBeats} beats); raise respBufferBeats")
+  private val NodePath = FetchPath.Node
+  private val PrimPath = FetchPath.Prim
 
   // ---- decode
   val ref = io.req.bits.childRef
@@ -148,7 +169,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
   val primBeatsLog = log2Ceil(g.primBeats)
 
   // ---- paths and dispatch (order FIFO: path of every request in flight)
-  val paths = Seq.fill(2)(Module(new FetchPath(g)))
+  val paths = Seq.tabulate(2)(i => Module(pathFactory(g, i)))
   val order = Module(new Queue(UInt(1.W), maxOutstanding))
 
   val target = Mux(isLeaf, PrimPath.U, NodePath.U)
@@ -169,7 +190,24 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     val beats = UInt(g.beatsBits.W)
   }, maxOutstanding))
   val splitter = Module(new BurstSplitter(g))
-  for ((path, i) <- paths.zipWithIndex) arb.io.in(i) <> path.io.memReq
+  // Each path's DRAM-response sink: straight to the path, or a credit-managed buffer in front of it.
+  val sinks = for ((path, i) <- paths.zipWithIndex) yield {
+    if (respBufferBeats == 0) {
+      arb.io.in(i) <> path.io.memReq
+      path.io.memResp
+    } else {
+      val buf = Module(new Queue(new FetchBeat(axi.dataBits), respBufferBeats))
+      val free = RegInit(respBufferBeats.U(log2Ceil(respBufferBeats + 1).W))
+      val fits = free >= path.io.memReq.bits.beats
+      arb.io.in(i).valid := path.io.memReq.valid && fits
+      arb.io.in(i).bits := path.io.memReq.bits
+      path.io.memReq.ready := arb.io.in(i).ready && fits
+      val taken = Mux(arb.io.in(i).fire, path.io.memReq.bits.beats, 0.U)
+      free := free - taken + buf.io.deq.fire.asUInt
+      path.io.memResp <> buf.io.deq
+      buf.io.enq
+    }
+  }
   splitter.io.in.valid := arb.io.out.valid && memOrder.io.enq.ready
   splitter.io.in.bits := arb.io.out.bits
   arb.io.out.ready := splitter.io.in.ready && memOrder.io.enq.ready
@@ -181,12 +219,12 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
   val rBeat = RegInit(0.U(g.beatsBits.W))
   val rHead = memOrder.io.deq.bits
   val rLast = rBeat === rHead.beats - 1.U
-  val rPathReady = VecInit(paths.map(_.io.memResp.ready))(rHead.path)
+  val rPathReady = VecInit(sinks.map(_.ready))(rHead.path)
   io.axi.r.ready := memOrder.io.deq.valid && rPathReady
-  for ((path, i) <- paths.zipWithIndex) {
-    path.io.memResp.valid := io.axi.r.valid && memOrder.io.deq.valid && rHead.path === i.U
-    path.io.memResp.bits.data := io.axi.r.bits.data
-    path.io.memResp.bits.last := rLast
+  for ((sink, i) <- sinks.zipWithIndex) {
+    sink.valid := io.axi.r.valid && memOrder.io.deq.valid && rHead.path === i.U
+    sink.bits.data := io.axi.r.bits.data
+    sink.bits.last := rLast
   }
   memOrder.io.deq.ready := io.axi.r.fire && rLast
   when(io.axi.r.fire) { rBeat := Mux(rLast, 0.U, rBeat + 1.U) }
@@ -213,4 +251,6 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
   io.busyBeats := counter(1.U, io.axi.r.fire)
 
   when(io.axi.r.valid) { assert(memOrder.io.deq.valid, "MemoryController: an R beat with no read outstanding") }
+  if (respBufferBeats > 0)
+    when(io.axi.r.valid && memOrder.io.deq.valid) { assert(rPathReady, "MemoryController: a response buffer overflowed its credits") }
 }

@@ -4,15 +4,30 @@ import java.nio.file.Files
 import scala.collection.mutable.ArrayBuffer
 import scala.util.Random
 import chisel3._
+import chisel3.util.Queue
 import chiseltest._
 import org.scalatest.flatspec.AnyFlatSpec
 import rtaccel.bvh.{MemoryImage, RefCodec}
 import rtaccel.config.{PlatformParams, RefFormat}
 import rtaccel.sim.{DramConfig, DramModel, ImageFile, MemTestImages}
 
+/** A stand-in for a cache that makes DRAM order differ from request order: its requests wait in a queue and
+  * leave only on cycles an LFSR allows (so the other path's later requests overtake them).
+  */
+class StallingPath(g: McGeometry, seed: Int) extends FetchPathModule(g) {
+  val inQ = Queue(io.in, 4)
+  val gate = chisel3.util.random.LFSR(8, true.B, Some(BigInt(seed)))(2, 0) === 0.U // ~1 cycle in 8
+  io.memReq.valid := inQ.valid && gate
+  io.memReq.bits := inQ.bits
+  inQ.ready := io.memReq.ready && gate
+  io.out <> io.memResp
+}
+
 /** MC + DRAM model, with AR/R traffic counters for the test. */
-class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, cfg: DramConfig) extends Module {
-  val mc = Module(new MemoryController(p, axi))
+class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, cfg: DramConfig,
+                pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
+                respBufferBeats: Int = 0) extends Module {
+  val mc = Module(new MemoryController(p, axi, pathFactory = pathFactory, respBufferBeats = respBufferBeats))
   val dram = Module(new DramModel(axi, words, hex, cfg))
   dram.io.axi <> mc.io.axi
   val io = IO(new Bundle {
@@ -27,7 +42,16 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
     val arBursts = Output(UInt(32.W))
     val maxLen = Output(UInt(8.W))
     val badBurst = Output(Bool())
+    val overtaken = Output(UInt(32.W))
   })
+  // Cycles in which DRAM delivers a beat for a different path than the one the response mux waits on.
+  import chisel3.util.experimental.BoringUtils
+  val orderValid = BoringUtils.bore(mc.order.io.deq.valid)
+  val orderPath = BoringUtils.bore(mc.order.io.deq.bits)
+  val memPath = BoringUtils.bore(mc.memOrder.io.deq.bits.path)
+  val overtaken = RegInit(0.U(32.W))
+  when(mc.io.axi.r.fire && orderValid && orderPath =/= memPath) { overtaken := overtaken + 1.U }
+  io.overtaken := overtaken
   mc.io.req <> io.req
   io.resp <> mc.io.resp
   mc.io.primBase := io.primBase
@@ -61,7 +85,9 @@ class MemoryControllerSpec extends AnyFlatSpec with ChiselScalatestTester {
     0 +: (for (n <- 0 until img.numNodes; j <- 0 until img.p.m if img.childRef(n, j) != 0) yield img.childRef(n, j))
 
   def runCase(name: String, dataBits: Int, tris: Int, nReqs: Int, cfg: DramConfig, reqProb: Double, readyProb: Double,
-              seed: Long, extraRefs: MemoryImage => Seq[Int] = _ => Nil, refFormat: Option[RefFormat] = None): Unit =
+              seed: Long, extraRefs: MemoryImage => Seq[Int] = _ => Nil, refFormat: Option[RefFormat] = None,
+              pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
+              respBufferBeats: Int = 0, maxCycles: Int = 30000): Unit =
     it should name in {
       val axi = AxiParams(dataBits = dataBits)
       val img = image(seed, tris, refFormat)
@@ -80,14 +106,14 @@ class MemoryControllerSpec extends AnyFlatSpec with ChiselScalatestTester {
         val (a, n) = span(ref); val k = n / axi.beatBytes
         (0 until k).map(i => (beat(bytes, a + i * axi.beatBytes, axi), i == k - 1))
       }
-      test(new McHarness(p, axi, lay.words, hex.toString, cfg)) { dut =>
+      test(new McHarness(p, axi, lay.words, hex.toString, cfg, pathFactory, respBufferBeats)) { dut =>
         dut.clock.setTimeout(0)
         dut.io.primBase.poke(lay.primBaseBytes.U)
         val got = ArrayBuffer[(BigInt, Boolean)]()
         var next = 0; var presenting = false; var cyc = 0
         var maxOutstanding = 0
         while (got.length < expected.length) {
-          assert(cyc < 100000, s"timeout after ${got.length}/${expected.length} beats")
+          assert(cyc < maxCycles, s"timeout after ${got.length}/${expected.length} beats")
           if (!presenting && next < refs.length && r.nextDouble() < reqProb) presenting = true
           dut.io.req.valid.poke(presenting.B)
           if (presenting) dut.io.req.bits.childRef.poke((refs(next) & 0xffffffffL).U)
@@ -119,6 +145,10 @@ class MemoryControllerSpec extends AnyFlatSpec with ChiselScalatestTester {
           f"(${totalBytes.toDouble / cyc}%.2f B/cycle), $bursts AR bursts, max len ${dut.io.maxLen.peek().litValue}, " +
           s"max outstanding $maxOutstanding")
         assert(bursts >= refs.length)
+        val overtaken = dut.io.overtaken.peek().litValue
+        info(s"$overtaken beats arrived for the other path than the one awaited")
+        if (pathFactory ne FetchPath.passThrough) assert(overtaken > 0, "the stalling path did not reorder DRAM traffic")
+        else assert(overtaken == 0)
       }
     }
 
@@ -139,4 +169,10 @@ class MemoryControllerSpec extends AnyFlatSpec with ChiselScalatestTester {
       // the page: 4 beats, 256, 252)
       Seq(c.leaf(0, n), c.leaf(math.min(60, img.numPrims - n), n), c.leaf(16, 16))
     })
+  // The cache plug-in point: a node path that holds its DRAM reads back, so primitive reads overtake them;
+  // responses must still leave in request order.
+  runCase("keep request order when a path reorders DRAM traffic (stalling node path, response buffers)",
+    dataBits = 256, tris = 300, nReqs = 80, DramConfig(8, 8, 1, randomExtraLatency = 5), reqProb = 0.9,
+    readyProb = 0.5, seed = 24, respBufferBeats = 40, maxCycles = 6000,
+    pathFactory = (g, i) => if (i == FetchPath.Node) new StallingPath(g, 0x5a) else new FetchPath(g))
 }
