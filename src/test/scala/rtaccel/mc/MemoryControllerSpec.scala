@@ -152,6 +152,15 @@ class MemoryControllerSpec extends AnyFlatSpec with ChiselScalatestTester {
       }
     }
 
+  "MemoryController" should "emit SystemVerilog for the paper preset" in {
+    val sv = _root_.circt.stage.ChiselStage.emitSystemVerilog(new MemoryController(rtaccel.config.Presets.paper2017, AxiParams()),
+      firtoolOpts = Array("-disable-all-randomization", "-strip-debug-info"))
+    val out = java.nio.file.Paths.get("build/verilog/MemoryController.sv")
+    Files.createDirectories(out.getParent)
+    Files.writeString(out, sv)
+    assert(sv.contains("module MemoryController") && sv.contains("module BurstSplitter"))
+  }
+
   behavior of "MemoryController with DramModel"
 
   runCase("return image bytes in request order (256-bit, random latency and backpressure)", dataBits = 256, tris = 400,

@@ -74,7 +74,7 @@ class ImageFileSpec extends AnyFlatSpec {
     }
   }
 
-  it should "write a 32 MB image quickly" in {
+  "ImageFile" should "write a 32 MB image quickly" in {
     val axi = AxiParams(dataBits = 256)
     val img = image(3, 50)
     // A synthetic large image: same params, 32 MB of primitive words.
