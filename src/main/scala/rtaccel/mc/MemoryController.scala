@@ -1,0 +1,256 @@
+package rtaccel.mc
+
+import chisel3._
+import chisel3.util._
+import rtaccel.config.PlatformParams
+
+/** A fetch request: a child reference word exactly as stored in the memory image (RefCodec layout).
+  * (Named childRef because `ref` is a reserved member of chisel3.Data.)
+  */
+class FetchReq extends Bundle {
+  val childRef = UInt(32.W)
+}
+
+/** One bus-width beat of fetched data; `last` marks the final beat of its request. */
+class FetchBeat(dataBits: Int) extends Bundle {
+  val data = UInt(dataBits.W)
+  val last = Bool()
+}
+
+/** A memory read of `beats` consecutive full-width beats from byte address `addr` (beat aligned). */
+class MemReq(addrBits: Int, beatsBits: Int) extends Bundle {
+  val addr = UInt(addrBits.W)
+  val beats = UInt(beatsBits.W)
+}
+
+/** Sizes shared by the MC and its paths. */
+final case class McGeometry(p: PlatformParams, axi: AxiParams) {
+  require(axi.beatBytes <= p.primStrideBytes && axi.beatBytes <= p.nodeStrideBytes,
+    s"an AXI beat (${axi.beatBytes} B) must not exceed a node (${p.nodeStrideBytes} B) or a primitive slot (${p.primStrideBytes} B); narrow the bus")
+  val nodeBeats: Int = p.nodeStrideBytes / axi.beatBytes
+  val primBeats: Int = p.primStrideBytes / axi.beatBytes
+  val maxBeats: Int = math.max(nodeBeats, p.refs.maxLeafPrims * primBeats)
+  val beatsBits: Int = log2Ceil(maxBeats + 1)
+  def memReq = new MemReq(axi.addrBits, beatsBits)
+}
+
+/** The interface a node or primitive cache implements to plug into the MC.
+  * in:      requests of this path, in global order (addr, beats).
+  * memReq:  reads this path wants from DRAM (a miss / fill); memResp: their beats, in memReq order,
+  *          with `last` on the final beat of each memReq.
+  * out:     the beats answering `in`, in `in` order, `last` on each request's final beat.
+  * A path may serve requests without DRAM (hits) and may issue its DRAM reads late, so DRAM order can differ
+  * from request order across the two paths. The MC then needs respBufferBeats > 0 (see MemoryController),
+  * which guarantees that every R beat has room to land and the shared in-order R channel never blocks.
+  */
+class FetchPathIO(g: McGeometry) extends Bundle {
+  val in = Flipped(Decoupled(g.memReq))
+  val memReq = Decoupled(g.memReq)
+  val memResp = Flipped(Decoupled(new FetchBeat(g.axi.dataBits)))
+  val out = Decoupled(new FetchBeat(g.axi.dataBits))
+}
+
+/** What the MC instantiates per path; a cache extends this and is passed to the MC as a factory. */
+abstract class FetchPathModule(val g: McGeometry) extends Module {
+  val io = IO(new FetchPathIO(g))
+}
+
+/** For now a pass-through: every request goes to DRAM, every beat straight back. */
+class FetchPath(g: McGeometry) extends FetchPathModule(g) {
+  io.memReq <> io.in
+  io.out <> io.memResp
+}
+
+object FetchPath {
+  val Node = 0
+  val Prim = 1
+  /** The default factory: pass-through for both paths. */
+  val passThrough: (McGeometry, Int) => FetchPathModule = (g, _) => new FetchPath(g)
+}
+
+/** Splits reads into AXI4 INCR bursts of at most 256 beats that never cross a 4 KB boundary
+  * (AXI4 forbids it; node and primitive fetches only hit this when a leaf straddles a 4 KB page).
+  * One burst per cycle; the next read is accepted in the cycle the previous read's final burst issues.
+  */
+class BurstSplitter(g: McGeometry, id: Int = 0) extends Module {
+  val axi = g.axi
+  val io = IO(new Bundle {
+    val in = Flipped(Decoupled(g.memReq))
+    val ar = Decoupled(new AxiAr(axi))
+  })
+  val beatShift = log2Ceil(axi.beatBytes)
+  val pageBeats = 4096 / axi.beatBytes
+  val busy = RegInit(false.B)
+  val addr = Reg(UInt(axi.addrBits.W))
+  val left = Reg(UInt(g.beatsBits.W))
+
+  val beatInPage = if (pageBeats > 1) (addr >> beatShift)(log2Ceil(pageBeats) - 1, 0) else 0.U
+  val toPageEnd = pageBeats.U(log2Ceil(pageBeats + 1).W) - beatInPage
+  val maxBurst = math.min(256, pageBeats)
+  val lim = Mux(toPageEnd < maxBurst.U, toPageEnd, maxBurst.U)
+  val n = Mux(left < lim, left, lim) // beats of this burst (>= 1 while busy)
+  val finalBurst = left <= lim
+
+  io.ar.valid := busy
+  io.ar.bits.id := id.U
+  io.ar.bits.addr := addr
+  io.ar.bits.len := (n - 1.U).pad(8)(7, 0)
+  io.ar.bits.size := beatShift.U
+  io.ar.bits.burst := 1.U
+  io.in.ready := !busy || (io.ar.fire && finalBurst)
+
+  when(io.ar.fire) {
+    addr := (addr + (n << beatShift))(axi.addrBits - 1, 0)
+    left := left - n
+    when(finalBurst) { busy := false.B }
+  }
+  when(io.in.fire) {
+    busy := true.B
+    addr := Cat(io.in.bits.addr >> beatShift, 0.U(beatShift.W))
+    left := io.in.bits.beats
+  }
+  when(io.in.fire) { assert(io.in.bits.beats =/= 0.U, "BurstSplitter: a read of zero beats") }
+}
+
+/** The memory controller (paper Section 4): turns child references into DRAM bursts and returns the beats
+  * in request order.
+  *
+  * Decode (RefCodec layout, widths from p.refs): MSB of the refBits-wide ref = leaf flag.
+  *   node ref: id = low nodeIdBits -> nodeStrideBytes at byte id * nodeStrideBytes (nodes start at 0)
+  *   leaf ref: count = field + 1, first = low primIndexBits -> count * 64 B at primBase + first * 64
+  * Requests are steered to the node path or the primitive path (FetchPath, the cache plug-in point); an
+  * order FIFO records the path of every accepted request and the response mux follows it, so responses
+  * leave in global request order whatever the paths do. The paths' DRAM reads share one AXI AR port through
+  * an arbiter; a second FIFO records which path each DRAM read belongs to and routes R beats back
+  * (in-order AXI, one ID). Backpressure on io.resp reaches R.ready combinationally.
+  * Up to maxOutstanding requests may be in flight. pathFactory(g, FetchPath.Node | FetchPath.Prim) builds the
+  * two paths (default: pass-through); a cache is plugged in by passing a factory that returns it.
+  *
+  * respBufferBeats = 0 (default, enough for the pass-through paths, whose DRAM order is the request order):
+  * R beats go straight to their path and io.resp backpressure reaches R.ready combinationally.
+  * respBufferBeats > 0 (needed once a path can reorder DRAM traffic relative to the other, e.g. a cache):
+  * each path gets a response buffer of that many beats; a path's DRAM read is granted only if its buffer has
+  * room for all its beats (credits), so R never waits on the order mux and cannot deadlock; backpressure then
+  * stops AR issue instead of holding R.
+  */
+class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 32,
+                       pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
+                       respBufferBeats: Int = 0) extends Module {
+  val g = McGeometry(p, axi)
+  private val ap = axi
+  val io = IO(new Bundle {
+    val req = Flipped(Decoupled(new FetchReq))
+    val resp = Decoupled(new FetchBeat(ap.dataBits))
+    val primBase = Input(UInt(ap.addrBits.W))
+    val axi = new AxiReadMaster(ap)
+    val nodeRequests = Output(UInt(48.W))
+    val leafRequests = Output(UInt(48.W))
+    val primsRequested = Output(UInt(48.W))
+    val bytesRequested = Output(UInt(48.W))
+    val busyBeats = Output(UInt(48.W))
+  })
+  val f = p.refs
+  require(respBufferBeats == 0 || respBufferBeats >= g.maxBeats,
+    s"a response buffer of $respBufferBeats beats cannot hold the largest fetch (${g.maxBeats} beats); raise respBufferBeats")
+  private val NodePath = FetchPath.Node
+  private val PrimPath = FetchPath.Prim
+
+  // ---- decode
+  val ref = io.req.bits.childRef
+  val isLeaf = ref(f.refBits - 1)
+  val nodeId = ref(f.nodeIdBits - 1, 0)
+  val first = ref(f.primIndexBits - 1, 0)
+  val count: UInt =
+    if (f.countBits == 0) 1.U(1.W)
+    else ref(f.primIndexBits + f.countBits - 1, f.primIndexBits) +& 1.U
+  def toAddr(x: UInt): UInt = x.pad(axi.addrBits)(axi.addrBits - 1, 0)
+  val nodeAddr = toAddr(nodeId << log2Ceil(p.nodeStrideBytes))
+  val primAddr = toAddr(io.primBase +& (first << log2Ceil(p.primStrideBytes)))
+  val primBeatsLog = log2Ceil(g.primBeats)
+
+  // ---- paths and dispatch (order FIFO: path of every request in flight)
+  val paths = Seq.tabulate(2)(i => Module(pathFactory(g, i)))
+  val order = Module(new Queue(UInt(1.W), maxOutstanding))
+
+  val target = Mux(isLeaf, PrimPath.U, NodePath.U)
+  val pathReady = Mux(isLeaf, paths(PrimPath).io.in.ready, paths(NodePath).io.in.ready)
+  io.req.ready := pathReady && order.io.enq.ready
+  order.io.enq.valid := io.req.valid && pathReady
+  order.io.enq.bits := target
+  for ((path, i) <- paths.zipWithIndex) {
+    path.io.in.valid := io.req.valid && order.io.enq.ready && target === i.U
+    path.io.in.bits.addr := (if (i == NodePath) nodeAddr else primAddr)
+    path.io.in.bits.beats := (if (i == NodePath) g.nodeBeats.U else (count << primBeatsLog))
+  }
+
+  // ---- DRAM side: arbiter -> burst splitter -> AR; R routed back by the memory-order FIFO
+  val arb = Module(new RRArbiter(g.memReq, 2))
+  val memOrder = Module(new Queue(new Bundle {
+    val path = UInt(1.W)
+    val beats = UInt(g.beatsBits.W)
+  }, maxOutstanding))
+  val splitter = Module(new BurstSplitter(g))
+  // Each path's DRAM-response sink: straight to the path, or a credit-managed buffer in front of it.
+  val sinks = for ((path, i) <- paths.zipWithIndex) yield {
+    if (respBufferBeats == 0) {
+      arb.io.in(i) <> path.io.memReq
+      path.io.memResp
+    } else {
+      val buf = Module(new Queue(new FetchBeat(axi.dataBits), respBufferBeats))
+      val free = RegInit(respBufferBeats.U(log2Ceil(respBufferBeats + 1).W))
+      val fits = free >= path.io.memReq.bits.beats
+      arb.io.in(i).valid := path.io.memReq.valid && fits
+      arb.io.in(i).bits := path.io.memReq.bits
+      path.io.memReq.ready := arb.io.in(i).ready && fits
+      val taken = Mux(arb.io.in(i).fire, path.io.memReq.bits.beats, 0.U)
+      free := free - taken + buf.io.deq.fire.asUInt
+      path.io.memResp <> buf.io.deq
+      buf.io.enq
+    }
+  }
+  splitter.io.in.valid := arb.io.out.valid && memOrder.io.enq.ready
+  splitter.io.in.bits := arb.io.out.bits
+  arb.io.out.ready := splitter.io.in.ready && memOrder.io.enq.ready
+  memOrder.io.enq.valid := arb.io.out.valid && splitter.io.in.ready
+  memOrder.io.enq.bits.path := arb.io.chosen
+  memOrder.io.enq.bits.beats := arb.io.out.bits.beats
+  io.axi.ar <> splitter.io.ar
+
+  val rBeat = RegInit(0.U(g.beatsBits.W))
+  val rHead = memOrder.io.deq.bits
+  val rLast = rBeat === rHead.beats - 1.U
+  val rPathReady = VecInit(sinks.map(_.ready))(rHead.path)
+  io.axi.r.ready := memOrder.io.deq.valid && rPathReady
+  for ((sink, i) <- sinks.zipWithIndex) {
+    sink.valid := io.axi.r.valid && memOrder.io.deq.valid && rHead.path === i.U
+    sink.bits.data := io.axi.r.bits.data
+    sink.bits.last := rLast
+  }
+  memOrder.io.deq.ready := io.axi.r.fire && rLast
+  when(io.axi.r.fire) { rBeat := Mux(rLast, 0.U, rBeat + 1.U) }
+
+  // ---- response mux in global request order
+  val sel = order.io.deq.bits
+  val outs = VecInit(paths.map(_.io.out.bits))
+  io.resp.valid := order.io.deq.valid && VecInit(paths.map(_.io.out.valid))(sel)
+  io.resp.bits := outs(sel)
+  for ((path, i) <- paths.zipWithIndex) path.io.out.ready := io.resp.ready && order.io.deq.valid && sel === i.U
+  order.io.deq.ready := io.resp.fire && io.resp.bits.last
+
+  // ---- counters
+  def counter(inc: UInt, en: Bool): UInt = {
+    val c = RegInit(0.U(48.W))
+    when(en) { c := c + inc }
+    c
+  }
+  val reqFire = io.req.fire
+  io.nodeRequests := counter(1.U, reqFire && !isLeaf)
+  io.leafRequests := counter(1.U, reqFire && isLeaf)
+  io.primsRequested := counter(count, reqFire && isLeaf)
+  io.bytesRequested := counter(Mux(isLeaf, count << log2Ceil(p.primStrideBytes), p.nodeStrideBytes.U), reqFire)
+  io.busyBeats := counter(1.U, io.axi.r.fire)
+
+  when(io.axi.r.valid) { assert(memOrder.io.deq.valid, "MemoryController: an R beat with no read outstanding") }
+  if (respBufferBeats > 0)
+    when(io.axi.r.valid && memOrder.io.deq.valid) { assert(rPathReady, "MemoryController: a response buffer overflowed its credits") }
+}
