@@ -20,6 +20,7 @@ HEIGHT  ?= 48
 DEPTH   ?= 5
 SEED    ?= 1
 SHARED_SCENES ?= $(abspath ../shared/scenes)
+RUN_CONFIG ?= paper2017
 MODEL_ARGS = --config $(CONFIG) --m $(M) --mppl $(MPPL)
 TRIS       = $$(tools/tris $(SCENE))
 
@@ -63,6 +64,7 @@ run: deps build/scenes/cornell.obj
 	@$(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=build/run/golden
 	@$(MAKE) --no-print-directory check SCENE=$(SCENE) GOLDEN=build/run/golden | tee build/run/check.log
 	@$(MAKE) --no-print-directory analyze SCENE=$(SCENE) GOLDEN=build/run/golden OUT=build/run/analysis | tee build/run/analyze.log
+	@$(MAKE) --no-print-directory simulate SCENE=$(SCENE) GOLDEN=build/run/golden CONFIG=$(RUN_CONFIG) OUT=build/run/simulate | tee build/run/simulate.log
 	@$(PY) -m dse.run_summary build/run
 
 # ---------------------------------------------------------------- user commands

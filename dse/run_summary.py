@@ -19,6 +19,7 @@ def last_json(path: Path) -> dict:
 def main(run_dir: str) -> None:
     d = Path(run_dir)
     check, analysis = last_json(d / "check.log"), last_json(d / "analyze.log")
+    sim = last_json(d / "simulate.log") if (d / "simulate.log").exists() else None
     meta = json.loads((d / "golden" / "meta.json").read_text())
     bpr = analysis["bytes_per_ray"]
     k = str(analysis["levels_for_mppl"])
@@ -31,11 +32,20 @@ def main(run_dir: str) -> None:
         print(f"            {int(mppl):>4}: {v['node']:9.1f} / {v['prim']:8.1f} / {v['total']:9.1f}")
     print(f"top 4 levels (MPPL {k}): {analysis['top4_levels_nodes']} nodes = {100 * analysis['top4_levels_node_share']:.1f}% "
           f"of nodes, {100 * analysis['top4_levels_access_share']:.1f}% of node accesses")
-    print(f"outputs     {d}/golden, {d}/analysis (CSV + PNG)")
+    if sim:
+        print(f"RTL         {sim['config']}: {sim['tus']} TUs, M={sim['m']}, MPPL={sim['mppl']}: {sim['cycles']:.0f} cycles = "
+              f"{sim['rays_per_s_at_clock']:.3g} rays/s at {sim['clock_mhz']:.0f} MHz, memory utilisation "
+              f"{100 * sim['mem_utilisation']:.1f}% of peak")
+        print(f"            vs model: mismatch {sim['mismatch_vs_model']}, lost {sim['lost']}, duplicated {sim['duplicated']}; "
+              f"simulated {sim['sim_cycles_per_wall_s']:.3g} cycles per wall second")
+    print(f"outputs     {d}/golden, {d}/analysis (CSV + PNG), {d}/simulate")
     print(json.dumps({"scene": meta.get("scene"), "rays": check["rays"], "agree": check["agree"],
                       "unexplained": check["unexplained"], "node_bytes_per_ray": bpr[k]["node"],
                       "prim_bytes_per_ray": bpr[k]["prim"], "mppl": int(k),
-                      "top4_levels_access_share": analysis["top4_levels_access_share"]}))
+                      "top4_levels_access_share": analysis["top4_levels_access_share"],
+                      **({"rtl_cycles": sim["cycles"], "rtl_rays_per_s": sim["rays_per_s_at_clock"],
+                          "rtl_mismatch_vs_model": sim["mismatch_vs_model"], "rtl_lost": sim["lost"],
+                          "mem_utilisation": sim["mem_utilisation"]} if sim else {})}))
 
 
 if __name__ == "__main__":
