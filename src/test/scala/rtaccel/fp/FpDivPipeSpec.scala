@@ -6,71 +6,66 @@ import chiseltest.simulator.VerilatorBackendAnnotation
 import org.scalatest.flatspec.AnyFlatSpec
 import org.scalatest.matchers.should.Matchers
 
-/** FpDivPipe with stages 0, 1, 5, 13 side by side on one stream of random operands (a new division in ~90%
-  * of cycles, bubbles otherwise): each output stream must be the input stream delayed by exactly `stages`
-  * cycles, valid for valid, with Java's quotient (fp32) / SoftFloat's (half).
+/** FpDivPipe with stages 0, 1, 5, 13 side by side, in fp32 and half precision, on one stream of random
+  * operands per format (a new division in ~90% of cycles, bubbles otherwise): each output stream must be the
+  * input stream delayed by exactly `stages` cycles, valid for valid, with Java's quotient (fp32) or
+  * SoftFloat's (half).
   */
 class FpDivPipeSpec extends AnyFlatSpec with ChiselScalatestTester with Matchers {
   private val stageList = Seq(0, 1, 5, 13)
+  private val half = FpFormat(5, 10)
+  private val cycles = 200000
 
-  private def runStream(dut: DivPipeHarness, cycles: Int, ref: (Long, Long) => Long, seed: Long): (Long, Long) = {
-    val f = dut.f
-    val g = new FpTestGen(f, seed)
-    val W = f.width
-    val wMask = (BigInt(1) << W) - 1
-    val maxS = stageList.max
-    val hist = new Array[(Boolean, Long, Long)](cycles)
+  /** Stream state and checker for one format's ports. */
+  private final class Stream(p: DivPipePorts, ref: (Long, Long) => Long, seed: Long) {
+    private val f = p.f
+    private val g = new FpTestGen(f, seed)
+    private val wMask = (BigInt(1) << f.width) - 1
+    private val hist = new Array[(Boolean, Long, Long)](cycles)
     var checked = 0L
     var failed = 0L
     val fails = scala.collection.mutable.ArrayBuffer[String]()
-    dut.clock.setTimeout(0)
-    for (t <- 0 until cycles) {
+
+    def cycle(t: Int): Unit = {
       val v = g.rnd.nextInt(10) != 0
       val (a, b) = if (g.rnd.nextInt(50) == 0) (g.randomEdge(), g.randomEdge()) else g.mixed()
       hist(t) = (v, a, b)
-      dut.io.valid.poke(v.B)
-      dut.io.a.poke(BigInt(a))
-      dut.io.b.poke(BigInt(b))
-      val ov = dut.io.outValid.peekInt()
-      val ob = dut.io.outBits.peekInt()
+      p.valid.poke(v.B)
+      p.a.poke(BigInt(a))
+      p.b.poke(BigInt(b))
+      val ov = p.outValid.peekInt()
+      val ob = p.outBits.peekInt()
       for ((s, i) <- stageList.zipWithIndex) {
         val gotV = ov.testBit(i)
-        val gotB = ((ob >> (i * W)) & wMask).toLong
+        val gotB = ((ob >> (i * f.width)) & wMask).toLong
         val (wantV, wa, wb) = if (t - s >= 0) hist(t - s) else (false, 0L, 0L)
         checked += 1
-        val ok = gotV == wantV && (!wantV || gotB == ref(wa, wb))
-        if (!ok) {
+        if (gotV != wantV || (wantV && gotB != ref(wa, wb))) {
           failed += 1
-          if (fails.length < 10) fails += f"stages=$s cycle=$t valid=$gotV (want $wantV) got=0x$gotB%x want=0x${ref(wa, wb)}%x a=0x$wa%x b=0x$wb%x"
+          if (fails.length < 10)
+            fails += f"(${f.expBits},${f.manBits}) stages=$s cycle=$t valid=$gotV (want $wantV) got=0x$gotB%x want=0x${ref(wa, wb)}%x a=0x$wa%x b=0x$wb%x"
         }
       }
-      dut.clock.step()
     }
-    if (fails.nonEmpty) info(fails.mkString("\n"))
-    require(maxS < cycles)
-    (checked, failed)
   }
 
-  "FpDivPipe" should s"stream fp32 divisions every cycle with stages ${stageList.mkString(",")} equal to Java float" in {
-    val cycles = 200000
-    test(new DivPipeHarness(FpFormat.fp32, stageList)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+  "FpDivPipe" should s"stream fp32 and half divisions every cycle with stages ${stageList.mkString(",")}, equal to Java/SoftFloat" in {
+    test(new DivPipeHarness(Seq(FpFormat.fp32, half), stageList)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+      dut.clock.setTimeout(0)
+      val sfHalf = new SoftFloat(half)
+      val streams = Seq(new Stream(dut.io(0), (a, b) => FpRef.java32(3, a, b), 5), new Stream(dut.io(1), sfHalf.div, 6))
       val t0 = System.nanoTime()
-      val (checked, failed) = runStream(dut, cycles, (a, b) => FpRef.java32(3, a, b), 5)
+      for (t <- 0 until cycles) {
+        streams.foreach(_.cycle(t))
+        dut.clock.step()
+      }
       val secs = (System.nanoTime() - t0) / 1e9
-      info(f"$cycles cycles x ${stageList.length} pipes = $checked output checks, ${cycles / secs}%.0f cycles/s")
-      failed shouldBe 0
-      checked shouldBe cycles.toLong * stageList.length
-    }
-  }
-
-  it should "stream half-precision divisions equal to SoftFloat" in {
-    val cycles = 50000
-    val half = FpFormat(5, 10)
-    val sf = new SoftFloat(half)
-    test(new DivPipeHarness(half, stageList)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
-      val (checked, failed) = runStream(dut, cycles, sf.div, 6)
-      failed shouldBe 0
-      checked shouldBe cycles.toLong * stageList.length
+      for (s <- streams) if (s.fails.nonEmpty) info(s.fails.mkString("\n"))
+      info(f"$cycles cycles x ${stageList.length} pipes x 2 formats = ${streams.map(_.checked).sum} output checks, ${cycles / secs}%.0f cycles/s")
+      for (s <- streams) {
+        s.failed shouldBe 0
+        s.checked shouldBe cycles.toLong * stageList.length
+      }
     }
   }
 

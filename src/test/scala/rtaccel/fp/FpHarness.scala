@@ -78,21 +78,26 @@ object FpHarnessDriver {
   }
 }
 
-/** Several FpDivPipe instances (different stage counts) fed the same stream; outputs packed. */
-class DivPipeHarness(val f: FpFormat, val stageList: Seq[Int]) extends Module {
-  val io = IO(new Bundle {
-    val valid = Input(Bool())
-    val a = Input(UInt(f.width.W))
-    val b = Input(UInt(f.width.W))
-    val outValid = Output(UInt(stageList.length.W))
-    val outBits = Output(UInt((stageList.length * f.width).W))
-  })
-  val pipes = stageList.map(s => Module(new FpDivPipe(f, s)))
-  for (p <- pipes) {
-    p.io.in.valid := io.valid
-    p.io.in.bits.a := io.a
-    p.io.in.bits.b := io.b
+/** Inputs and packed outputs of several FpDivPipe instances (one per stage count) in one format. */
+class DivPipePorts(val f: FpFormat, val stageList: Seq[Int]) extends Bundle {
+  val valid = Input(Bool())
+  val a = Input(UInt(f.width.W))
+  val b = Input(UInt(f.width.W))
+  val outValid = Output(UInt(stageList.length.W))
+  val outBits = Output(UInt((stageList.length * f.width).W))
+}
+
+/** For each format, FpDivPipe instances with every stage count in stageList, fed the same stream. */
+class DivPipeHarness(fmts: Seq[FpFormat], stageList: Seq[Int]) extends Module {
+  val io = IO(MixedVec(fmts.map(f => new DivPipePorts(f, stageList))))
+  for ((f, p) <- fmts.zip(io)) {
+    val pipes = stageList.map(s => Module(new FpDivPipe(f, s)))
+    for (d <- pipes) {
+      d.io.in.valid := p.valid
+      d.io.in.bits.a := p.a
+      d.io.in.bits.b := p.b
+    }
+    p.outValid := Cat(pipes.map(_.io.out.valid).reverse)
+    p.outBits := Cat(pipes.map(_.io.out.bits).reverse)
   }
-  io.outValid := Cat(pipes.map(_.io.out.valid).reverse)
-  io.outBits := Cat(pipes.map(_.io.out.bits).reverse)
 }

@@ -6,11 +6,11 @@ import org.scalatest.flatspec.AnyFlatSpec
 import org.scalatest.matchers.should.Matchers
 
 /** RTL (Verilator) against Java float for fp32: all edge pairs, constructed ties and range edges, and
-  * 1M random pairs through every op (each pair goes through all 13 functions in parallel, 8 lanes per cycle).
+  * 1M random pairs through every op (each pair goes through all 13 functions in parallel, 4 lanes per poke/peek).
   */
 class FpRtlSpec extends AnyFlatSpec with ChiselScalatestTester with Matchers {
   private val fp32 = FpFormat.fp32
-  private val lanes = 8
+  private val lanes = 4
   private val nRandom = 1000000
 
   "Fp (fp32 RTL, Verilator)" should s"equal Java float on edge pairs, ties, range edges and $nRandom random pairs per op" in {
