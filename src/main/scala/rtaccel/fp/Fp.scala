@@ -39,6 +39,34 @@ object Fp {
     val mag: UInt = x(f.width - 2, 0)
   }
 
+  /** x << amt truncated to x's width, as a logarithmic shifter (no widened intermediate). */
+  private[fp] def shlTrunc(x: UInt, amt: UInt): UInt = {
+    val n = x.getWidth
+    amt.asBools.zipWithIndex.foldLeft(x) { case (v, (bit, i)) =>
+      val k = 1 << i
+      if (k >= n) Mux(bit, 0.U(n.W), v) else Mux(bit, Cat(v(n - 1 - k, 0), 0.U(k.W)), v)
+    }
+  }
+
+  /** Leading-zero count of x (x != 0; the result for x == 0 is unspecified), as a log-depth tree:
+    * x is padded with ones to a power-of-two width, halves are combined as (hi all zero) ? hi.width + lo : hi.
+    */
+  private[fp] def lzc(x: UInt): UInt = {
+    val n = x.getWidth
+    val k = log2Ceil(n) max 1
+    val padded = if ((1 << k) > n) Cat(x, Fill((1 << k) - n, 1.U(1.W))) else x
+    def go(v: UInt): (Bool, UInt) = { // (all zero, count) for a block of power-of-two width
+      val w = v.getWidth
+      if (w == 1) (!v(0), 0.U(0.W))
+      else {
+        val (hz, hc) = go(v(w - 1, w / 2))
+        val (lz, lc) = go(v(w / 2 - 1, 0))
+        (hz && lz, Mux(hz, Cat(1.U(1.W), lc), Cat(0.U(1.W), hc)))
+      }
+    }
+    go(padded)._2
+  }
+
   private def packInf(f: FpFormat, sign: Bool): UInt = Cat(sign, f.maxExp.U(f.expBits.W), 0.U(f.manBits.W))
   private def packZero(f: FpFormat, sign: Bool): UInt = Cat(sign, 0.U((f.width - 1).W))
   private def nan(f: FpFormat): UInt = f.canonicalNaN.U(f.width.W)
@@ -47,8 +75,11 @@ object Fp {
     *   (-1)^sign * (sig / 2^(n-1)) * 2^(exp - bias)   (+ a positive amount below sig's LSB if stickyIn)
     * where n = sig width. `sig` need not be normalised; `exp` is a signed biased exponent that may lie
     * outside the representable range (underflow goes to subnormals/zero, overflow to inf).
+    * Hardware trimming for callers that know their range: `canUnderflow = false` promises exp >= 1 (drops the
+    * right shifter), `maxLeftShift` bounds sig's leading zeros that need normalising (narrower shifter/LZC).
     */
-  private[fp] def roundPack(f: FpFormat, sign: Bool, exp: SInt, sigIn: UInt, stickyIn: Bool): UInt = {
+  private[fp] def roundPack(f: FpFormat, sign: Bool, exp: SInt, sigIn: UInt, stickyIn: Bool,
+                            canUnderflow: Boolean = true, maxLeftShift: Int = Int.MaxValue): UInt = {
     val m = f.manBits
     val e = f.expBits
     val n0 = sigIn.getWidth
@@ -58,12 +89,14 @@ object Fp {
     val ex = exp.pad(w)
 
     // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
-    val leftCase = ex >= 1.S
-    val lz = PriorityEncoder(Reverse(sig)) // leading zeros (sig != 0)
+    val leftCase = if (canUnderflow) ex >= 1.S else true.B
+    val maxLs = maxLeftShift min (n - 1)
+    // leading zeros of sig (sig != 0), saturated at maxLs via a sentinel bit
+    val lz = if (maxLs >= n - 1) lzc(sig) else lzc(Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
     val room = ex - 1.S
     val roomSat = Mux(room > n.S, n.U, room.asUInt(log2Ceil(n + 1) - 1, 0))
     val sl = Mux(lz < roomSat, lz, roomSat)
-    val shl = (sig << sl)(n - 1, 0)
+    val shl = shlTrunc(sig, sl)
     // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
     val rAmt = 1.S - ex
     val rSat = Mux(rAmt > (n + 1).S, (n + 1).U, rAmt.asUInt(log2Ceil(n + 2) - 1, 0))
@@ -71,12 +104,12 @@ object Fp {
     val shr = wideR(2 * n, n + 1)
     val lostR = wideR(n, 0).orR
 
-    val s = Mux(leftCase, shl, shr)
+    val s = if (canUnderflow) Mux(leftCase, shl, shr) else shl
     val eOut = Mux(leftCase, ex - sl.zext, 1.S) // >= 1; with s's MSB clear only when eOut == 1 (subnormal)
     val kept = s(n - 1, n - 1 - m) // m+1 bits, hidden bit on top
     val guard = s(n - 2 - m)
     val low = if (n - 3 - m >= 0) s(n - 3 - m, 0).orR else false.B
-    val sticky = stickyIn || (!leftCase && lostR) || low
+    val sticky = stickyIn || (if (canUnderflow) !leftCase && lostR else false.B) || low
     val up = guard && (sticky || kept(0))
     val rounded = kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
 
@@ -123,7 +156,7 @@ object Fp {
     val res = Mux(effSub, xExt - yExt, xExt + yExt) // m+5 bits, top bit = carry position
     val ew = expW(f)
     val exp = (xExp.zext + 1.S).pad(ew)
-    val rounded = roundPack(f, xSign, exp, res, false.B)
+    val rounded = roundPack(f, xSign, exp, res, false.B, canUnderflow = false) // exp = xExp + 1 >= 2
 
     val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isInf && effSub)
     val isInf = ua.isInf || ub.isInf
@@ -172,8 +205,8 @@ object Fp {
   def divSteps(f: FpFormat): Int = f.manBits + 3
 
   private def normalise(f: FpFormat, u: Unpacked): (UInt, SInt) = {
-    val lz = PriorityEncoder(Reverse(u.sig))
-    val sigN = (u.sig << lz)(f.manBits, 0)
+    val lz = lzc(u.sig)
+    val sigN = shlTrunc(u.sig, lz)
     (sigN, u.exp.zext.pad(expW(f)) - lz.zext)
   }
 
@@ -209,7 +242,8 @@ object Fp {
 
   def divPost(f: FpFormat, s: DivState): UInt = {
     // quotient = quo / 2^(m+2) * 2^(exp - bias); quo is m+3 bits with its top bit at position m+2 or m+1
-    val rounded = roundPack(f, s.sign, s.exp, s.quo, s.rem =/= 0.U)
+    // normalised operands: quotient in (1/2, 2), at most one leading zero
+    val rounded = roundPack(f, s.sign, s.exp, s.quo, s.rem =/= 0.U, maxLeftShift = 1)
     Mux(s.special, s.specialVal, rounded)
   }
 

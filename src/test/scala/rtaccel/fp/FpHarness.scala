@@ -16,8 +16,15 @@ object FpLanePorts {
   def laneBits(f: FpFormat): Int = FpOps.numValueOps * f.width + 5
 }
 
-/** Purely combinational test module (registers nothing): one FpLanePorts per (format, lanes). */
+/** Purely combinational test module (registers nothing) for chiseltest, which wants a clocked Module. */
 class FpOpsHarness(fmts: Seq[(FpFormat, Int)]) extends Module {
+  val io = IO(MixedVec(fmts.map { case (f, l) => new FpLanePorts(f, l) }))
+  private val core = Module(new FpOpsComb(fmts))
+  io <> core.io
+}
+
+/** One FpLanePorts per (format, lanes), every Fp function on every lane; no clock. */
+class FpOpsComb(fmts: Seq[(FpFormat, Int)]) extends RawModule {
   val io = IO(MixedVec(fmts.map { case (f, l) => new FpLanePorts(f, l) }))
   for (((f, lanes), p) <- fmts.zip(io)) {
     val W = f.width
