@@ -133,8 +133,9 @@ final class FpTestGen(val f: FpFormat, seed: Long) {
     case 4 => // product just below/above the smallest normal: may round up from subnormal to normal
       val ea = 1 + rnd.nextInt(f.bias - 1)
       (bits(randSign(), ea, fracMask - rnd.nextInt(3)), bits(randSign(), f.bias - ea, rnd.nextInt(3).toLong))
-    case 0 => // a / 2^k landing in the subnormal range
-      val a = finiteWithExp(math.min(1 + rnd.nextInt(m + 3), f.maxExp - 1))
+    case 0 => // a / 2^k landing in the subnormal range (all-ones a: ties that round up to the smallest normal)
+      val ea = math.min(1 + rnd.nextInt(m + 3), f.maxExp - 1)
+      val a = if (rnd.nextBoolean()) bits(randSign(), ea, fracMask) else finiteWithExp(ea)
       val k = 1 + rnd.nextInt(m + 4)
       (a, bits(randSign(), math.min(f.bias + k, f.maxExp - 1), 0))
     case 1 => // a * 2^-k into subnormals, or b tiny
