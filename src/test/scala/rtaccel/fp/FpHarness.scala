@@ -42,6 +42,10 @@ class FpOpsComb(fmts: Seq[(FpFormat, Int)]) extends RawModule {
 
 /** Drives FpLanePorts from Scala: batches of `lanes` operand pairs per poke/peek. */
 object FpHarnessDriver {
+  private val two64 = BigInt(1) << 64
+  /** Raw bits as a nonnegative BigInt (fp64 patterns with the sign bit set are negative Longs). */
+  def unsigned(x: Long): BigInt = if (x < 0) BigInt(x) + two64 else BigInt(x)
+
   /** Runs every pair through all ops, checking against `ref`; returns the number of pairs. */
   def run(p: FpLanePorts, pairs: Iterator[(Long, Long)], ref: (Int, Long, Long) => Long, chk: FpCheck): Long = {
     val f = p.f
@@ -57,7 +61,7 @@ object FpHarnessDriver {
       while (k < lanes && pairs.hasNext) {
         val (a, b) = pairs.next()
         buf(k) = (a, b)
-        in |= (BigInt(a) | (BigInt(b) << W)) << (2 * W * k)
+        in |= (unsigned(a) | (unsigned(b) << W)) << (2 * W * k)
         k += 1
       }
       p.in.poke(in)

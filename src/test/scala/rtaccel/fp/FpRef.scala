@@ -44,6 +44,32 @@ object FpRef {
     }
   }
 
+  /** Java double (fp64), same conventions as java32; min/max with the Fp32 reference semantics on doubles. */
+  def java64(op: Int, a: Long, b: Long): Long = {
+    import java.lang.Double.{doubleToRawLongBits, longBitsToDouble}
+    val x = longBitsToDouble(a)
+    val y = longBitsToDouble(b)
+    @inline def arith(r: Double): Long = if (r.isNaN) 0x7ff8000000000000L else doubleToRawLongBits(r)
+    @inline def sel(r: Double): Long = doubleToRawLongBits(r)
+    @inline def bool(c: Boolean): Long = if (c) 1L else 0L
+    val nan = 0x7ff8000000000000L
+    (op: @annotation.switch) match {
+      case 0 => arith(x + y)
+      case 1 => arith(x - y)
+      case 2 => arith(x * y)
+      case 3 => arith(x / y)
+      case 4 => if (x.isNaN) b else if (y.isNaN) a else if (x < y) a else b
+      case 5 => if (x.isNaN) b else if (y.isNaN) a else if (x > y) a else b
+      case 6 => if (x.isNaN || y.isNaN) nan else if (x < y) a else b
+      case 7 => if (x.isNaN || y.isNaN) nan else if (x > y) a else b
+      case 8 => bool(x < y)
+      case 9 => bool(x <= y)
+      case 10 => bool(x > y)
+      case 11 => bool(x >= y)
+      case _ => bool(x == y)
+    }
+  }
+
   def soft(sf: SoftFloat)(op: Int, a: Long, b: Long): Long = {
     @inline def bool(c: Boolean): Long = if (c) 1L else 0L
     (op: @annotation.switch) match {

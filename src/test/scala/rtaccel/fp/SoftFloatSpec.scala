@@ -51,6 +51,24 @@ class SoftFloatSpec extends AnyFlatSpec with Matchers {
     parts.head._3.missing shouldBe empty
   }
 
+  "SoftFloat(fp64)" should "equal Java double on every pair of edge values and 1,000,000 random pairs per op" in {
+    val f = FpFormat(11, 52)
+    val g = new FpTestGen(f, 3)
+    val sf = new SoftFloat(f)
+    val chk = new FpCheck("soft64")
+    val pairs = g.edgePairs.iterator ++ Iterator.fill(1000000)(g.mixed())
+    var n = 0L
+    for ((a, b) <- pairs) {
+      var op = 0
+      while (op < FpOps.n) { chk.check(op, a, b, FpRef.soft(sf)(op, a, b), FpRef.java64(op, a, b)); op += 1 }
+      n += 1
+    }
+    info(chk.report)
+    chk.totalFailed shouldBe 0
+    chk.minChecked shouldBe n
+    n should be > 1000000L
+  }
+
   // ---------- brute-force oracle for tiny formats
 
   /** Exact rational n/d (d > 0). */
