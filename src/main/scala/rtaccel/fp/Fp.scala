@@ -190,10 +190,13 @@ object Fp {
   // ---------------------------------------------------------------------------------------------------------
   // div: restoring radix-2 digit recurrence, split into pre / step / post so FpDivPipe can register between them
 
-  /** State carried between divider steps. When `special` is set the result is `specialVal`. */
+  /** State carried between divider steps. A special result (NaN, ±inf, ±0) is three class flags plus the sign,
+    * so pipeline registers don't carry a whole word for it.
+    */
   class DivState(val f: FpFormat) extends Bundle {
-    val special = Bool()
-    val specialVal = UInt(f.width.W)
+    val resNaN = Bool()
+    val resInf = Bool()
+    val resZero = Bool()
     val sign = Bool()
     val exp = SInt(expW(f).W)
     val divisor = UInt((f.manBits + 1).W)
@@ -218,8 +221,9 @@ object Fp {
     val isNaN = ua.isNaN || ub.isNaN || (ua.isZero && ub.isZero) || (ua.isInf && ub.isInf)
     val isInf = ua.isInf || ub.isZero
     val isZero = ua.isZero || ub.isInf
-    s.special := isNaN || isInf || isZero
-    s.specialVal := Mux(isNaN, nan(f), Mux(isInf, packInf(f, sign), packZero(f, sign)))
+    s.resNaN := isNaN
+    s.resInf := !isNaN && isInf
+    s.resZero := !isNaN && !isInf && isZero
     val (na, ea) = normalise(f, ua)
     val (nb, eb) = normalise(f, ub)
     s.sign := sign
@@ -244,7 +248,7 @@ object Fp {
     // quotient = quo / 2^(m+2) * 2^(exp - bias); quo is m+3 bits with its top bit at position m+2 or m+1
     // normalised operands: quotient in (1/2, 2), at most one leading zero
     val rounded = roundPack(f, s.sign, s.exp, s.quo, s.rem =/= 0.U, maxLeftShift = 1)
-    Mux(s.special, s.specialVal, rounded)
+    Mux(s.resNaN, nan(f), Mux(s.resInf, packInf(f, s.sign), Mux(s.resZero, packZero(f, s.sign), rounded)))
   }
 
   def div(f: FpFormat, a: UInt, b: UInt): UInt = {
