@@ -1,0 +1,301 @@
+package rtaccel.fp
+
+import chisel3._
+import chisel3.util._
+
+/** Combinational IEEE 754 binary floating-point operators, generic in [[FpFormat]].
+  *
+  * All arithmetic rounds to nearest, ties to even; subnormal inputs and outputs are kept (no flush to zero);
+  * overflow gives ±inf; every NaN produced by add/sub/mul/div is `f.canonicalNaN`. The min/max selectors follow
+  * the comparator-select reference in `rtaccel.model.Fp32` exactly (on equal operands the second is returned).
+  *
+  * Structure (see docs/fp.md): each operation unpacks its operands, produces an exact or
+  * guard/sticky-extended significand with a signed biased exponent, and hands it to one shared
+  * normalise-round-pack stage ([[roundPack]]). Callers place pipeline registers around these functions.
+  */
+object Fp {
+
+  /** Width of the signed exponent datapath: room for mul/div exponent sums plus subnormal normalisation. */
+  private[fp] def expW(f: FpFormat): Int = log2Ceil(3 * f.maxExp + 2 * f.manBits + 16) + 2
+
+  /** Fields and classes of one operand. `exp` is the effective biased exponent (1 for subnormals and zero),
+    * `sig` the significand with its hidden bit (m+1 bits).
+    */
+  private[fp] final class Unpacked(f: FpFormat, x: UInt) {
+    val m: Int = f.manBits
+    val e: Int = f.expBits
+    val sign: Bool = x(f.width - 1)
+    val expF: UInt = x(f.width - 2, m)
+    val frac: UInt = x(m - 1, 0)
+    val expZero: Bool = expF === 0.U
+    val expOnes: Bool = expF.andR
+    val fracZero: Bool = frac === 0.U
+    val isZero: Bool = expZero && fracZero
+    val isInf: Bool = expOnes && fracZero
+    val isNaN: Bool = expOnes && !fracZero
+    val sig: UInt = Cat(!expZero, frac)
+    val exp: UInt = Mux(expZero, 1.U(e.W), expF)
+    /** Magnitude bits: for non-NaN values, integer order of these equals order of |x|. */
+    val mag: UInt = x(f.width - 2, 0)
+  }
+
+  /** x << amt truncated to x's width, as a logarithmic shifter (no widened intermediate). */
+  private[fp] def shlTrunc(x: UInt, amt: UInt): UInt = {
+    val n = x.getWidth
+    amt.asBools.zipWithIndex.foldLeft(x) { case (v, (bit, i)) =>
+      val k = 1 << i
+      if (k >= n) Mux(bit, 0.U(n.W), v) else Mux(bit, Cat(v(n - 1 - k, 0), 0.U(k.W)), v)
+    }
+  }
+
+  /** Leading-zero count of x (x != 0; the result for x == 0 is unspecified), as a log-depth tree:
+    * x is padded with ones to a power-of-two width, halves are combined as (hi all zero) ? hi.width + lo : hi.
+    */
+  private[fp] def lzc(x: UInt): UInt = {
+    val n = x.getWidth
+    val k = log2Ceil(n) max 1
+    val padded = if ((1 << k) > n) Cat(x, Fill((1 << k) - n, 1.U(1.W))) else x
+    def go(v: UInt): (Bool, UInt) = { // (all zero, count) for a block of power-of-two width
+      val w = v.getWidth
+      if (w == 1) (!v(0), 0.U(0.W))
+      else {
+        val (hz, hc) = go(v(w - 1, w / 2))
+        val (lz, lc) = go(v(w / 2 - 1, 0))
+        (hz && lz, Mux(hz, Cat(1.U(1.W), lc), Cat(0.U(1.W), hc)))
+      }
+    }
+    go(padded)._2
+  }
+
+  private def packInf(f: FpFormat, sign: Bool): UInt = Cat(sign, f.maxExp.U(f.expBits.W), 0.U(f.manBits.W))
+  private def packZero(f: FpFormat, sign: Bool): UInt = Cat(sign, 0.U((f.width - 1).W))
+  private def nan(f: FpFormat): UInt = f.canonicalNaN.U(f.width.W)
+
+  /** Normalise, round to nearest even and pack a finite nonzero value
+    *   (-1)^sign * (sig / 2^(n-1)) * 2^(exp - bias)   (+ a positive amount below sig's LSB if stickyIn)
+    * where n = sig width. `sig` need not be normalised; `exp` is a signed biased exponent that may lie
+    * outside the representable range (underflow goes to subnormals/zero, overflow to inf).
+    * Hardware trimming for callers that know their range: `canUnderflow = false` promises exp >= 1 (drops the
+    * right shifter), `maxLeftShift` bounds sig's leading zeros that need normalising (narrower shifter/LZC).
+    */
+  private[fp] def roundPack(f: FpFormat, sign: Bool, exp: SInt, sigIn: UInt, stickyIn: Bool,
+                            canUnderflow: Boolean = true, maxLeftShift: Int = Int.MaxValue): UInt = {
+    val m = f.manBits
+    val e = f.expBits
+    val n0 = sigIn.getWidth
+    val n = n0 max (m + 3)
+    val sig = if (n > n0) Cat(sigIn, 0.U((n - n0).W)) else sigIn
+    val w = exp.getWidth max (log2Ceil(n + 2) + 2)
+    val ex = exp.pad(w)
+
+    // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
+    val leftCase = if (canUnderflow) ex >= 1.S else true.B
+    val maxLs = maxLeftShift min (n - 1)
+    // leading zeros of sig (sig != 0), saturated at maxLs via a sentinel bit
+    val lz = if (maxLs >= n - 1) lzc(sig) else lzc(Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
+    val room = ex - 1.S
+    val roomSat = Mux(room > n.S, n.U, room.asUInt(log2Ceil(n + 1) - 1, 0))
+    val sl = Mux(lz < roomSat, lz, roomSat)
+    val shl = shlTrunc(sig, sl)
+    // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
+    val rAmt = 1.S - ex
+    val rSat = Mux(rAmt > (n + 1).S, (n + 1).U, rAmt.asUInt(log2Ceil(n + 2) - 1, 0))
+    val wideR = Cat(sig, 0.U((n + 1).W)) >> rSat
+    val shr = wideR(2 * n, n + 1)
+    val lostR = wideR(n, 0).orR
+
+    val s = if (canUnderflow) Mux(leftCase, shl, shr) else shl
+    val eOut = Mux(leftCase, ex - sl.zext, 1.S) // >= 1; with s's MSB clear only when eOut == 1 (subnormal)
+    val kept = s(n - 1, n - 1 - m) // m+1 bits, hidden bit on top
+    val guard = s(n - 2 - m)
+    val low = if (n - 3 - m >= 0) s(n - 3 - m, 0).orR else false.B
+    val sticky = stickyIn || (if (canUnderflow) !leftCase && lostR else false.B) || low
+    val up = guard && (sticky || kept(0))
+    val rounded = kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
+
+    // Packing trick: ((eOut-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
+    // (hidden bit 0, eOut = 1) packs with exponent field 0, and a rounding carry bumps the exponent.
+    val eM1 = eOut - 1.S
+    val bigExp = eM1 >= f.maxExp.S
+    val eLow = eM1.asUInt(e - 1, 0)
+    val sum = Cat(eLow, 0.U(m.W)) +& rounded
+    val ovf = bigExp || sum >= (BigInt(f.maxExp) << m).U
+    Mux(ovf, packInf(f, sign), Cat(sign, sum(e + m - 1, 0)))
+  }
+
+  // ---------------------------------------------------------------------------------------------------------
+  // add / sub
+
+  private def addCore(f: FpFormat, a: UInt, b: UInt, negB: Boolean): UInt = {
+    val m = f.manBits
+    val ua = new Unpacked(f, a)
+    val ub = new Unpacked(f, b)
+    val sA = ua.sign
+    val sB = if (negB) !ub.sign else ub.sign
+
+    // Order by magnitude: x is the larger operand, y the smaller.
+    val swap = ub.mag > ua.mag
+    val xSign = Mux(swap, sB, sA)
+    val xExp = Mux(swap, ub.exp, ua.exp)
+    val ySig = Mux(swap, ua.sig, ub.sig)
+    val yExp = Mux(swap, ua.exp, ub.exp)
+    val xSig = Mux(swap, ub.sig, ua.sig)
+
+    // Align y with three extra bits (guard, round, sticky); shifted-out bits are ORed into the LSB.
+    val g = 3
+    val d = xExp - yExp
+    val dMax = m + g + 2
+    val dSat = Mux(d > dMax.U, dMax.U, d)
+    val yWide = Cat(ySig, 0.U((g + dMax).W)) >> dSat
+    val yAligned = yWide(m + g + dMax, dMax)
+    val yLost = yWide(dMax - 1, 0).orR
+    val yExt = Cat(0.U(1.W), yAligned | yLost)
+    val xExt = Cat(0.U(1.W), xSig, 0.U(g.W))
+
+    val effSub = sA =/= sB
+    val res = Mux(effSub, xExt - yExt, xExt + yExt) // m+5 bits, top bit = carry position
+    val ew = expW(f)
+    val exp = (xExp.zext + 1.S).pad(ew)
+    val rounded = roundPack(f, xSign, exp, res, false.B, canUnderflow = false) // exp = xExp + 1 >= 2
+
+    val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isInf && effSub)
+    val isInf = ua.isInf || ub.isInf
+    val infSign = Mux(ua.isInf, sA, sB)
+    val zeroSign = sA && sB // exact zero: -0 only for (-0) + (-0)
+    Mux(isNaN, nan(f),
+      Mux(isInf, packInf(f, infSign),
+        Mux(res === 0.U, packZero(f, zeroSign), rounded)))
+  }
+
+  def add(f: FpFormat, a: UInt, b: UInt): UInt = addCore(f, a, b, negB = false)
+  def sub(f: FpFormat, a: UInt, b: UInt): UInt = addCore(f, a, b, negB = true)
+
+  // ---------------------------------------------------------------------------------------------------------
+  // mul
+
+  def mul(f: FpFormat, a: UInt, b: UInt): UInt = {
+    val ua = new Unpacked(f, a)
+    val ub = new Unpacked(f, b)
+    val sign = ua.sign ^ ub.sign
+    val prod = ua.sig * ub.sig // 2m+2 bits, binary point after the top bit pair
+    val ew = expW(f)
+    val exp = (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (f.bias - 1).S
+    val rounded = roundPack(f, sign, exp, prod, false.B)
+    val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
+    Mux(isNaN, nan(f),
+      Mux(ua.isInf || ub.isInf, packInf(f, sign),
+        Mux(ua.isZero || ub.isZero, packZero(f, sign), rounded)))
+  }
+
+  // ---------------------------------------------------------------------------------------------------------
+  // div: restoring radix-2 digit recurrence, split into pre / step / post so FpDivPipe can register between them
+
+  /** State carried between divider steps. A special result (NaN, ±inf, ±0) is three class flags plus the sign,
+    * so pipeline registers don't carry a whole word for it.
+    */
+  class DivState(val f: FpFormat) extends Bundle {
+    val resNaN = Bool()
+    val resInf = Bool()
+    val resZero = Bool()
+    val sign = Bool()
+    val exp = SInt(expW(f).W)
+    val divisor = UInt((f.manBits + 1).W)
+    val rem = UInt((f.manBits + 2).W)
+    val quo = UInt((f.manBits + 3).W)
+  }
+
+  /** Number of recurrence steps: m+1 significand bits, a guard bit and one bit for the quotient's range (1/2, 2). */
+  def divSteps(f: FpFormat): Int = f.manBits + 3
+
+  private def normalise(f: FpFormat, u: Unpacked): (UInt, SInt) = {
+    val lz = lzc(u.sig)
+    val sigN = shlTrunc(u.sig, lz)
+    (sigN, u.exp.zext.pad(expW(f)) - lz.zext)
+  }
+
+  def divPre(f: FpFormat, a: UInt, b: UInt): DivState = {
+    val ua = new Unpacked(f, a)
+    val ub = new Unpacked(f, b)
+    val s = Wire(new DivState(f))
+    val sign = ua.sign ^ ub.sign
+    val isNaN = ua.isNaN || ub.isNaN || (ua.isZero && ub.isZero) || (ua.isInf && ub.isInf)
+    val isInf = ua.isInf || ub.isZero
+    val isZero = ua.isZero || ub.isInf
+    s.resNaN := isNaN
+    s.resInf := !isNaN && isInf
+    s.resZero := !isNaN && !isInf && isZero
+    val (na, ea) = normalise(f, ua)
+    val (nb, eb) = normalise(f, ub)
+    s.sign := sign
+    s.exp := ea - eb + f.bias.S
+    s.divisor := nb
+    s.rem := na
+    s.quo := 0.U
+    s
+  }
+
+  def divStep(f: FpFormat, in: DivState): DivState = {
+    val s = Wire(new DivState(f))
+    s := in
+    val ge = in.rem >= in.divisor
+    val r = Mux(ge, in.rem - in.divisor, in.rem) // < divisor
+    s.rem := (r << 1)(f.manBits + 1, 0)
+    s.quo := Cat(in.quo(f.manBits + 1, 0), ge)
+    s
+  }
+
+  def divPost(f: FpFormat, s: DivState): UInt = {
+    // quotient = quo / 2^(m+2) * 2^(exp - bias); quo is m+3 bits with its top bit at position m+2 or m+1
+    // normalised operands: quotient in (1/2, 2), at most one leading zero
+    val rounded = roundPack(f, s.sign, s.exp, s.quo, s.rem =/= 0.U, maxLeftShift = 1)
+    Mux(s.resNaN, nan(f), Mux(s.resInf, packInf(f, s.sign), Mux(s.resZero, packZero(f, s.sign), rounded)))
+  }
+
+  def div(f: FpFormat, a: UInt, b: UInt): UInt = {
+    var s = divPre(f, a, b)
+    for (_ <- 0 until divSteps(f)) s = divStep(f, s)
+    divPost(f, s)
+  }
+
+  // ---------------------------------------------------------------------------------------------------------
+  // comparisons and selection
+
+  def isNaN(f: FpFormat, a: UInt): Bool = new Unpacked(f, a).isNaN
+
+  /** a < b ignoring NaN (callers mask NaN); -0 == +0. */
+  private def ltRaw(f: FpFormat, ua: Unpacked, ub: Unpacked): Bool = {
+    val bothZero = ua.isZero && ub.isZero
+    val diffSign = ua.sign =/= ub.sign
+    Mux(diffSign, ua.sign && !bothZero, Mux(ua.sign, ua.mag > ub.mag, ua.mag < ub.mag))
+  }
+  private def eqRaw(f: FpFormat, ua: Unpacked, ub: Unpacked): Bool =
+    (ua.sign === ub.sign && ua.mag === ub.mag) || (ua.isZero && ub.isZero)
+
+  def lt(f: FpFormat, a: UInt, b: UInt): Bool = {
+    val ua = new Unpacked(f, a); val ub = new Unpacked(f, b)
+    !ua.isNaN && !ub.isNaN && ltRaw(f, ua, ub)
+  }
+  def gt(f: FpFormat, a: UInt, b: UInt): Bool = lt(f, b, a)
+  def eq(f: FpFormat, a: UInt, b: UInt): Bool = {
+    val ua = new Unpacked(f, a); val ub = new Unpacked(f, b)
+    !ua.isNaN && !ub.isNaN && eqRaw(f, ua, ub)
+  }
+  def le(f: FpFormat, a: UInt, b: UInt): Bool = {
+    val ua = new Unpacked(f, a); val ub = new Unpacked(f, b)
+    !ua.isNaN && !ub.isNaN && (ltRaw(f, ua, ub) || eqRaw(f, ua, ub))
+  }
+  def ge(f: FpFormat, a: UInt, b: UInt): Bool = le(f, b, a)
+
+  /** if a NaN -> b, else if b NaN -> a, else if (a < b) a else b */
+  def minNum(f: FpFormat, a: UInt, b: UInt): UInt =
+    Mux(isNaN(f, a), b, Mux(isNaN(f, b), a, Mux(lt(f, a, b), a, b)))
+  /** if a NaN -> b, else if b NaN -> a, else if (a > b) a else b */
+  def maxNum(f: FpFormat, a: UInt, b: UInt): UInt =
+    Mux(isNaN(f, a), b, Mux(isNaN(f, b), a, Mux(gt(f, a, b), a, b)))
+  /** if either NaN -> canonical NaN, else if (a < b) a else b */
+  def minProp(f: FpFormat, a: UInt, b: UInt): UInt =
+    Mux(isNaN(f, a) || isNaN(f, b), nan(f), Mux(lt(f, a, b), a, b))
+  /** if either NaN -> canonical NaN, else if (a > b) a else b */
+  def maxProp(f: FpFormat, a: UInt, b: UInt): UInt =
+    Mux(isNaN(f, a) || isNaN(f, b), nan(f), Mux(gt(f, a, b), a, b))
+}
