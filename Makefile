@@ -108,9 +108,8 @@ TUS_ARG = $(if $(TUS),--tus $(TUS))
 verilog: deps
 	$(JAVA) rtaccel.cli.EmitVerilog --config $(VCONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) --out build/$(VCONFIG)
 
-# Lint waivers (reasons in docs/platform.md): DECLFILENAME (firtool names files after modules, one per file is
-# already the case), UNUSEDSIGNAL (generated ports of library queues/arbiters that a configuration leaves unused).
-LINT_WAIVERS = -Wno-DECLFILENAME -Wno-UNUSEDSIGNAL
+# Lint waivers, each with its reason, are in tools/lint.vlt.
+LINT_WAIVERS = tools/lint.vlt
 lint: verilog verilator
 	verilator --lint-only -Wall $(LINT_WAIVERS) --top-module RtAccelTop build/$(VCONFIG)/*.sv && echo "[lint] build/$(VCONFIG): verilator -Wall clean"
 

@@ -8,13 +8,17 @@ import rtaccel.top.RtAccelTop
   * file per module under OUT, through firtool.
   */
 object EmitVerilog {
-  def main(args: Array[String]): Unit = Cli.run(args) { a =>
+  def main(args: Array[String]): Unit = Cli.run(args)(main0)
+
+  def main0(a: Args): Unit = {
     val cfg = a.need("config")
     if (cfg == "fit") throw new rtaccel.io.InputError("make verilog needs a preset (CONFIG=paper2017|paper2017-lrp|small); fitted configs come from a scene via make simulate")
     val p0 = Cli.params(a)
     val p = p0.copy(name = cfg)
     val out = Paths.get(a.get("out", s"build/$cfg"))
     Files.createDirectories(out)
+    // a previous configuration's modules must not linger next to this one's
+    Files.list(out).toArray.map(_.asInstanceOf[java.nio.file.Path]).filter(f => f.toString.endsWith(".sv")).foreach(Files.delete)
     // randomization off and debug info stripped: the output is for synthesis and lint, not for simulation
     new _root_.circt.stage.ChiselStage().execute(
       Array("--target-dir", out.toString, "--target", "systemverilog", "--split-verilog") ++

@@ -44,7 +44,7 @@ class RtAccelTop(p: PlatformParams) extends Module {
   val mc = Module(new MemoryController(p, axiP))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   val configWord = BigInt(p.m) | (BigInt(p.refs.maxLeafPrims) << 8) | (BigInt(p.tus) << 16) | (BigInt(p.stackDepth) << 32)
-  val regs = Module(new RegFile(configWord, RtAccelTop.counterNames))
+  val regs = Module(new RegFile(configWord, RtAccelTop.counterNames, axiP.addrBits))
   regs.io.port <> io.regs
 
   // host stream -> TC
