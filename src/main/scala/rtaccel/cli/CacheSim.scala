@@ -87,6 +87,7 @@ object CacheSim {
         Seq[(String, Int => CacheParams)]("lru_4way" -> (e => CacheParams(e, 4, "lru")), "plru_4way" -> (e => CacheParams(e, 4, "plru")),
           "hybrid_lrp6" -> (e => CacheParams(e, 1, "hybrid", 6)))
     val sb = new StringBuilder("config," + sizes.mkString(",") + "\n")
+    val t0 = System.nanoTime(); var total = 0L
     for ((name, mk) <- cfgs) {
       val rates = sizes.map { e =>
         val m = new CacheModel(mk(e))
@@ -94,10 +95,13 @@ object CacheSim {
           def node(ray: Int, id: Int, level: Int): Unit = m.access(id, level)
           def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = ()
         })
+        total += m.accesses
         f"${m.missRate}%.5f"
       }
       sb ++= name + "," + rates.mkString(",") + "\n"
     }
+    val secs = (System.nanoTime() - t0) / 1e9
+    sb ++= f"# ${cfgs.size * sizes.size} replays, $total node accesses in $secs%.2f s = ${total / secs}%.3e accesses/s (model incl. replay)\n"
     Cli.writeText(out, sb.toString)
     Console.err.print(sb.toString)
   }

@@ -3,6 +3,13 @@ package rtaccel.cache
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.cache.policy._
 
+object PolicySpec {
+  /** PLRU as an explicit tree of bits: a node is a leaf (way) or a branch with a mutable bit. */
+  sealed trait T
+  final case class Leaf(way: Int) extends T
+  final class Br(var bit: Int, val l: T, val r: T) extends T
+}
+
 /** Every policy, all reachable states x all ways, against an independent plain reading of its rule. */
 class PolicySpec extends AnyFunSuite {
   /** LRU as an explicit list, most recent first. Decoding the state is the only shared knowledge (the encoding). */
@@ -14,6 +21,7 @@ class PolicySpec extends AnyFunSuite {
   for (ways <- Seq(2, 4, 8)) test(s"true LRU, $ways ways: every permutation x every way against a list") {
     val p = TrueLru(ways)
     val states = p.states
+    val stateSet = states.toSet
     assert(states.size == (1 to ways).product && states.forall(s => s >= 0 && s < (1L << p.stateBits)))
     assert(decodeLru(ways, p.init) == (ways - 1 to 0 by -1).toList)
     for (s <- states) {
@@ -23,7 +31,7 @@ class PolicySpec extends AnyFunSuite {
       for (w <- 0 until ways) {
         val expect = w :: order.filterNot(_ == w)
         assert(decodeLru(ways, p.touch(s, w)) == expect, s"touch $w of $order")
-        assert(states.contains(p.touch(s, w)))
+        assert(stateSet.contains(p.touch(s, w)))
       }
     }
     // the init order evicts ways 0,1,2,... when filled in that order
@@ -31,10 +39,7 @@ class PolicySpec extends AnyFunSuite {
     for (w <- 0 until ways) { assert(p.victim(s) == w); s = p.touch(s, w) }
   }
 
-  /** PLRU as an explicit tree of bits: a node is a leaf (way) or a branch with a mutable bit. */
-  private sealed trait T
-  private final case class Leaf(way: Int) extends T
-  private final class Br(var bit: Int, val l: T, val r: T) extends T
+  import PolicySpec._
   private def mkTree(lo: Int, n: Int): T = if (n == 1) Leaf(lo) else new Br(0, mkTree(lo, n / 2), mkTree(lo + n / 2, n / 2))
   private def branches(t: T): List[Br] = t match { // heap order (breadth-first): root, then left/right level by level
     case _: Leaf => Nil
