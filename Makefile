@@ -26,11 +26,11 @@ TRIS       = $$(tools/tris $(SCENE))
 
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
-.PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace check analyze bench clean \
+.PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
         verilog lint simulate regress paper-nocache
 
 help:
-	@echo "make run | test | golden | trace | check | analyze | bench   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -77,6 +77,14 @@ trace: deps
 	@test -n "$(RAYS)" || { echo "error: give RAYS=<rays.npy>" >&2; exit 2; }
 	@test -n "$(OUT)" || { echo "error: give OUT=<dir>" >&2; exit 2; }
 	@T=$(TRIS) && $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $(RAYS) --out $(OUT) $(MODEL_ARGS)
+
+# Node/primitive cache models on the traversal's accesses (docs/caches.md). Last stdout line: JSON.
+CACHE_ARGS = --tus $(or $(TUS),1) --node-cache $(or $(NODE_CACHE),0) --node-ways $(or $(NODE_WAYS),1) \
+  --max-level $(or $(MAX_LEVEL),15) --prim-cache $(or $(PRIM_CACHE),0) --prim-ways $(or $(PRIM_WAYS),1) \
+  $(if $(NODE_POLICY),--node-policy $(NODE_POLICY)) $(if $(PRIM_POLICY),--prim-policy $(PRIM_POLICY)) $(if $(SWEEP),--sweep-out $(SWEEP))
+cachesim: deps
+	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
+	  T=$(TRIS) && $(JAVA) rtaccel.cli.CacheSim --tris "$$T" --scene-label $(SCENE) --rays $$R $(MODEL_ARGS) $(CACHE_ARGS)
 
 check: deps
 	@test -n "$(GOLDEN)" || { echo "error: give GOLDEN=<dir made by make golden>" >&2; exit 2; }

@@ -1,0 +1,114 @@
+package rtaccel.cache
+
+import rtaccel.cache.policy.{LevelPolicy, Policies, ReplacementPolicy}
+import rtaccel.config.CacheParams
+
+/** Trace-driven cache model (plain arrays, no allocation per access). `lines` lines of one request each
+  * (node cache: one node; primitive cache: one leaf of up to MPPL primitives, so lines = entries / MPPL via
+  * `entriesPerLine`). A request's line id is `lineOf(id)`; set index = low log2(sets) bits of the line id,
+  * tag = the rest (paper 6.2; the model keeps the whole line id as the tag).
+  *
+  * Policies (exact rules in docs/caches.md):
+  *  - dm, lru, plru: plain set-associative cache (dm = 1 way), every miss fills.
+  *  - lrp: LRU sets + LevelPolicy on the victim; a refused fill is a bypass (cache unchanged).
+  *  - bf: static buffer preloaded with line ids 0 until lines (breadth-first ids = highest nodes), never replaced.
+  *  - hybrid: direct-mapped array of `lines` lines plus an LRP side cache of max(1, lines/8) lines,
+  *    min(4, side lines)-way true LRU. Hit in either is a hit; on a miss the DM line is replaced if it is empty or
+  *    LevelPolicy.allocate(its level, incoming); otherwise the side cache is offered the line under LRP rules;
+  *    refused there too = bypass.
+  */
+final class CacheModel(val c: CacheParams, lineOf: Int => Int = identity, entriesPerLine: Int = 1) {
+  require(c.entries > 0, "CacheModel needs entries > 0 (0 means no cache)")
+  require(entriesPerLine >= 1, "entries per line must be positive")
+  val lines: Int = math.max(1, c.entries / entriesPerLine)
+  require(Integer.bitCount(lines) == 1, s"cache lines ($lines) must be a power of two")
+  val ways: Int = c.ways
+  require(lines % ways == 0, s"cache ways ($ways) must divide its lines ($lines)")
+  private val policyName = c.policy
+  val policy: ReplacementPolicy = Policies.byName(policyName, ways)
+  private val maxLevel = c.maxLevel
+  val sets: Int = lines / ways
+  private val setMask = sets - 1
+  private val tags = Array.fill(lines)(-1) // line id, -1 = empty
+  private val lvls = new Array[Int](lines)
+  private val state = Array.fill(sets)(policy.init)
+  private val isBf = policyName == "bf"
+  private val isLrp = policyName == "lrp"
+  private val isHybrid = policyName == "hybrid"
+
+  // hybrid side cache (LRP)
+  val sideLines: Int = if (isHybrid) math.max(1, lines / 8) else 0
+  val sideWays: Int = if (isHybrid) math.min(4, sideLines) else 0
+  private val side: ReplacementPolicy = if (isHybrid) Policies.byName("lru", sideWays) else null
+  private val sideSets = if (isHybrid) sideLines / sideWays else 0
+  private val sTags = Array.fill(sideLines)(-1)
+  private val sLvls = new Array[Int](sideLines)
+  private val sState = Array.fill(sideSets)(if (isHybrid) side.init else 0)
+
+  var hits = 0L; var misses = 0L; var bypasses = 0L
+
+  def accesses: Long = hits + misses
+  def missRate: Double = if (accesses == 0) 0.0 else misses.toDouble / accesses
+
+  /** One request; true on a hit. */
+  def access(id: Int, level: Int): Boolean = {
+    val line = lineOf(id)
+    if (isBf) {
+      if (line >= 0 && line < lines) { hits += 1; true } else { misses += 1; bypasses += 1; false }
+    } else if (isHybrid) accessHybrid(line, level)
+    else {
+      val set = line & setMask
+      val base = set * ways
+      var w = 0
+      while (w < ways) {
+        if (tags(base + w) == line) { hits += 1; state(set) = policy.touch(state(set), w); return true }
+        w += 1
+      }
+      misses += 1
+      if (!fill(tags, lvls, state, policy, base, set, ways, line, level, isLrp)) bypasses += 1
+      false
+    }
+  }
+
+  /** Fills `line` into the set at `base` (empty way first, lowest first; else the policy victim, subject to the
+    * level policy when `lrp`). Returns false for a refused fill (bypass), which leaves everything unchanged.
+    */
+  private def fill(tg: Array[Int], lv: Array[Int], st: Array[Int], pol: ReplacementPolicy, base: Int, set: Int,
+                   nWays: Int, line: Int, level: Int, lrp: Boolean): Boolean = {
+    var w = 0
+    while (w < nWays && tg(base + w) != -1) w += 1
+    if (w == nWays) {
+      w = pol.victim(st(set))
+      if (lrp && !LevelPolicy.allocate(lv(base + w), level, maxLevel)) return false
+    }
+    tg(base + w) = line; lv(base + w) = level; st(set) = pol.touch(st(set), w)
+    true
+  }
+
+  private def accessHybrid(line: Int, level: Int): Boolean = {
+    val i = line & setMask
+    if (tags(i) == line) { hits += 1; return true }
+    val sset = line & (sideSets - 1)
+    val sbase = sset * sideWays
+    var w = 0
+    while (w < sideWays) {
+      if (sTags(sbase + w) == line) { hits += 1; sState(sset) = side.touch(sState(sset), w); return true }
+      w += 1
+    }
+    misses += 1
+    if (tags(i) == -1 || LevelPolicy.allocate(lvls(i), level, maxLevel)) { tags(i) = line; lvls(i) = level }
+    else if (!fill(sTags, sLvls, sState, side, sbase, sset, sideWays, line, level, lrp = true)) bypasses += 1
+    false
+  }
+
+  /** Whether a line is currently held (for tests). */
+  def contains(id: Int): Boolean = {
+    val line = lineOf(id)
+    if (isBf) line >= 0 && line < lines
+    else {
+      val base = (line & setMask) * ways
+      (0 until ways).exists(w => tags(base + w) == line) ||
+        (isHybrid && { val b = (line & (sideSets - 1)) * sideWays; (0 until sideWays).exists(w => sTags(b + w) == line) })
+    }
+  }
+}

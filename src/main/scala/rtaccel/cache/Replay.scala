@@ -1,0 +1,65 @@
+package rtaccel.cache
+
+import rtaccel.model.AccessSink
+
+/** Node and primitive caches in front of DRAM, fed with traversal accesses. Either may be absent (None).
+  * Counts the DRAM traffic left after the caches: a node miss moves `nodeBytes`, a leaf miss moves
+  * count x `primBytes` (the leaf's primitives), as in make trace's bytes per ray.
+  */
+final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[CacheModel], nodeBytes: Int, primBytes: Int)
+    extends AccessSink {
+  var nodeAccesses = 0L; var leafAccesses = 0L
+  var nodeDramBytes = 0L; var primDramBytes = 0L
+  var primTests = 0L
+  def node(ray: Int, id: Int, level: Int): Unit = {
+    nodeAccesses += 1
+    val hit = nodeCache match { case Some(c) => c.access(id, level); case None => false }
+    if (!hit) nodeDramBytes += nodeBytes
+  }
+  def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = {
+    leafAccesses += 1; primTests += count
+    val hit = primCache match { case Some(c) => c.access(firstPrim, level); case None => false }
+    if (!hit) primDramBytes += count.toLong * primBytes
+  }
+}
+
+/** Replays a recorded access trace (AccessRecorder rows: ray, kind, id/first, level, count) into a sink.
+  *
+  * Model of N traversal units: N ray slots are active at once; the replay visits slots round-robin and issues
+  * ONE access (node or leaf) of the slot's ray per visit, in that ray's own (single-TU) order. When a ray's last
+  * access has been issued, the slot takes the next ray not yet started (rays in file order) at its next visit.
+  * The replay ends when every ray is finished. N = 1 is exactly the per-ray order of one TU.
+  * This ignores timing (a TU waiting on a miss, leaves taking longer than nodes): it models the interleaving
+  * of N concurrent rays' access streams at a shared cache, not cycle-accurate arbitration.
+  */
+object Replay {
+  def interleaved(rows: Array[Int], tus: Int, sink: AccessSink): Unit = {
+    require(tus >= 1, s"TUS must be at least 1 (got $tus)")
+    val n = rows.length / 5
+    // start row of each run of consecutive rows with the same ray (traversal records rays one after another)
+    val startsB = Array.newBuilder[Int]
+    var r = 0
+    while (r < n) { if (r == 0 || rows(5 * r) != rows(5 * (r - 1))) startsB += r; r += 1 }
+    val starts = startsB.result()
+    val nRays = starts.length
+    def end(k: Int): Int = if (k + 1 < nRays) starts(k + 1) else n
+    val pos = Array.fill(tus)(-1); val stop = Array.fill(tus)(-1)
+    var next = 0; var active = 0
+    var s = 0
+    while (s < tus && next < nRays) { pos(s) = starts(next); stop(s) = end(next); next += 1; active += 1; s += 1 }
+    s = 0
+    while (active > 0) {
+      if (pos(s) >= 0) {
+        val b = 5 * pos(s)
+        if (rows(b + 1) == 0) sink.node(rows(b), rows(b + 2), rows(b + 3))
+        else sink.leaf(rows(b), rows(b + 2), rows(b + 4), rows(b + 3))
+        pos(s) += 1
+        if (pos(s) == stop(s)) {
+          if (next < nRays) { pos(s) = starts(next); stop(s) = end(next); next += 1 }
+          else { pos(s) = -1; active -= 1 }
+        }
+      }
+      s += 1; if (s == tus) s = 0
+    }
+  }
+}

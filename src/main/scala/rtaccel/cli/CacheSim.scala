@@ -1,0 +1,108 @@
+package rtaccel.cli
+
+import rtaccel.bvh.MemoryImage
+import rtaccel.cache.{CacheModel, CacheSink, Replay}
+import rtaccel.config.{CacheParams, PlatformParams}
+import rtaccel.io.InputError
+import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
+
+/** make cachesim: the reference traversal on a rays file, its accesses replayed through a node cache and a
+  * primitive cache model (one TU's order, or N TUs interleaved), DRAM traffic after the caches and a
+  * bandwidth-bound throughput estimate. Last stdout line: one JSON object.
+  * Optional --sweep-out <csv>: miss rate of the node cache for dm/bf/lrp0..6 (and lru 4-way) at 256..8192
+  * entries on the same access stream, written as CSV.
+  */
+object CacheSim {
+  def main(args: Array[String]): Unit = Cli.run(args)(main0)
+
+  def cacheArg(a: Args, prefix: String, policyDefault: String): CacheParams = {
+    val entries = a.int(s"$prefix-cache", 0)
+    if (entries < 0) throw new InputError(s"--$prefix-cache must be >= 0 (got $entries)")
+    val ways = a.int(s"$prefix-ways", 1)
+    val pol = a.get(s"$prefix-policy", if (policyDefault.nonEmpty) policyDefault else if (ways == 1) "dm" else "lru")
+    CacheParams(entries = entries, ways = ways, policy = pol, maxLevel = a.int("max-level", 15))
+  }
+
+  def models(p: PlatformParams, node: CacheParams, prim: CacheParams): (Option[CacheModel], Option[CacheModel]) = (
+    if (node.entries > 0) Some(new CacheModel(node)) else None,
+    if (prim.entries > 0) Some(new CacheModel(prim, identity, p.mppl)) else None)
+
+  def main0(a: Args): Unit = {
+    val node = cacheArg(a, "node", "")
+    val prim = cacheArg(a, "prim", "")
+    val tus = a.int("tus", 1)
+    if (tus < 1 || tus > 1024) throw new InputError(s"TUS must be in 1..1024 (got $tus)")
+    val (scene, rays, _) = Cli.inputs(a)
+    val b = Cli.build(scene, Cli.params(a).copy(nodeCache = node, primCache = prim), Cli.fitRequested(a))
+    val p = b.params
+    models(p, node, prim) // validate geometry before the traversal runs
+    val img = MemoryImage.pack(b.bvh, b.scene, p)
+    // Record once; the replay (1 or N TUs) is what is timed as the cache model.
+    val rec = new AccessRecorder; val st = new RayStats
+    val t0 = System.nanoTime()
+    new Traversal(img).traceAll(rays, rec, st)
+    val traceS = (System.nanoTime() - t0) / 1e9
+    val rows = rec.toArray
+    val (nc, pc) = models(p, node, prim)
+    val sink = new CacheSink(nc, pc, p.nodeAccessBytes, p.primAccessBytes)
+    val t1 = System.nanoTime()
+    Replay.interleaved(rows, tus, sink)
+    val wall = (System.nanoTime() - t1) / 1e9
+    val n = math.max(1, rays.count).toDouble
+    val accesses = sink.nodeAccesses + sink.leafAccesses
+    def stats(c: Option[CacheModel], cp: CacheParams) = c match {
+      case Some(m) => ujson.Obj("entries" -> cp.entries, "lines" -> m.lines, "ways" -> cp.ways, "policy" -> cp.policy,
+        "max_level" -> cp.maxLevel, "hits" -> m.hits.toDouble, "misses" -> m.misses.toDouble, "bypasses" -> m.bypasses.toDouble,
+        "miss_rate" -> m.missRate, "side_lines" -> m.sideLines)
+      case None => ujson.Obj("entries" -> 0, "hits" -> 0, "misses" -> 0, "bypasses" -> 0, "miss_rate" -> 1.0)
+    }
+    val nodeBpr = sink.nodeDramBytes / n; val primBpr = sink.primDramBytes / n
+    val nodeBprNoCache = sink.nodeAccesses * p.nodeAccessBytes / n; val primBprNoCache = sink.primTests * p.primAccessBytes / n
+    val sustained = p.memory.bytesPerSecond * p.memory.sustainedEfficiency // = clock x sustained bytes per cycle
+    def bound(bpr: Double): Double = if (bpr > 0) sustained / bpr else Double.PositiveInfinity
+    a.opt("sweep-out").foreach(out => sweep(rows, java.nio.file.Paths.get(out), tus))
+    val j = ujson.Obj(
+      "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
+      "tus" -> tus, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
+      "node_accesses" -> sink.nodeAccesses.toDouble, "leaf_accesses" -> sink.leafAccesses.toDouble,
+      "node_cache" -> stats(nc, node), "prim_cache" -> stats(pc, prim),
+      "node_bytes_per_ray" -> nodeBpr, "prim_bytes_per_ray" -> primBpr, "dram_bytes_per_ray" -> (nodeBpr + primBpr),
+      "node_bytes_per_ray_nocache" -> nodeBprNoCache, "prim_bytes_per_ray_nocache" -> primBprNoCache,
+      "node_bandwidth_reduction" -> (if (nodeBpr > 0) nodeBprNoCache / nodeBpr else Double.PositiveInfinity),
+      "sustained_dram_bytes_per_s" -> sustained,
+      "bandwidth_bound_rays_per_s" -> bound(nodeBpr + primBpr),
+      "bandwidth_bound_rays_per_s_nocache" -> bound(nodeBprNoCache + primBprNoCache),
+      "bandwidth_bound_note" -> "clock x sustained DRAM bytes/cycle / DRAM bytes per ray; ignores compute and latency limits",
+      "trace_s" -> traceS, "wall_s" -> wall, "accesses_per_s" -> accesses / math.max(wall, 1e-9))
+    println(ujson.write(j))
+  }
+
+  /** Node-cache miss rate grid on one access stream. */
+  def sweep(rows: Array[Int], out: java.nio.file.Path, tus: Int): Unit = {
+    val sizes = Seq(256, 512, 1024, 2048, 4096, 8192)
+    val cfgs: Seq[(String, Int => CacheParams)] =
+      Seq[(String, Int => CacheParams)]("dm" -> (e => CacheParams(e, 1, "dm")), "bf" -> (e => CacheParams(e, 1, "bf"))) ++
+        (0 to 6).map(l => s"lrp$l" -> ((e: Int) => CacheParams(e, 1, "lrp", l))) ++
+        (0 to 6 by 3).map(l => s"lrp${l}_4way" -> ((e: Int) => CacheParams(e, 4, "lrp", l))) ++
+        Seq[(String, Int => CacheParams)]("lru_4way" -> (e => CacheParams(e, 4, "lru")), "plru_4way" -> (e => CacheParams(e, 4, "plru")),
+          "hybrid_lrp6" -> (e => CacheParams(e, 1, "hybrid", 6)))
+    val sb = new StringBuilder("config," + sizes.mkString(",") + "\n")
+    val t0 = System.nanoTime(); var total = 0L
+    for ((name, mk) <- cfgs) {
+      val rates = sizes.map { e =>
+        val m = new CacheModel(mk(e))
+        Replay.interleaved(rows, tus, new AccessSink {
+          def node(ray: Int, id: Int, level: Int): Unit = m.access(id, level)
+          def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = ()
+        })
+        total += m.accesses
+        f"${m.missRate}%.5f"
+      }
+      sb ++= name + "," + rates.mkString(",") + "\n"
+    }
+    val secs = (System.nanoTime() - t0) / 1e9
+    sb ++= f"# ${cfgs.size * sizes.size} replays, $total node accesses in $secs%.2f s = ${total / secs}%.3e accesses/s (model incl. replay)\n"
+    Cli.writeText(out, sb.toString)
+    Console.err.print(sb.toString)
+  }
+}

@@ -1,0 +1,56 @@
+package rtaccel.cli
+
+import java.nio.file.{Files, Path}
+import org.scalatest.funsuite.AnyFunSuite
+import rtaccel.TestScenes
+import rtaccel.io.Npy
+
+class CacheSimSpec extends AnyFunSuite {
+  private val dir = Files.createTempDirectory("cachesimspec")
+  private def save(name: String, data: Array[Float], shape: Seq[Int]): Path = {
+    val p = dir.resolve(name); Npy.write(p, "'<f4'", shape, bb => data.foreach(bb.putFloat), data.length * 4); p
+  }
+  private val scene = TestScenes.soup(3, 500)
+  private val tris = save("tris.npy", scene.coords, Seq(scene.triangles, 3, 3))
+  private val rays = TestScenes.rays(4, 300)
+  private val raysPath = save("rays.npy", rays.data, Seq(rays.count, 8))
+  private def sim(extra: String*): (Int, String, String) = {
+    val out = new java.io.ByteArrayOutputStream(); val err = new java.io.ByteArrayOutputStream()
+    val code = Console.withOut(out)(Console.withErr(err)(
+      Cli.status(Array("--tris", tris.toString, "--rays", raysPath.toString) ++ extra)(a => CacheSim.main0(a))))
+    (code, out.toString, err.toString)
+  }
+
+  test("JSON last line carries the pinned keys; caches cut DRAM bytes") {
+    val (code, out, _) = sim("--node-cache", "256", "--node-policy", "lrp", "--max-level", "3", "--prim-cache", "512", "--prim-ways", "2", "--tus", "4")
+    assert(code == 0)
+    val j = ujson.read(out.trim.linesIterator.toSeq.last)
+    for (k <- Seq("node_cache", "prim_cache", "wall_s", "accesses_per_s", "node_bytes_per_ray", "prim_bytes_per_ray",
+      "bandwidth_bound_rays_per_s", "dram_bytes_per_ray")) assert(j.obj.contains(k), k)
+    for (c <- Seq("node_cache", "prim_cache"); k <- Seq("hits", "misses", "miss_rate")) assert(j(c).obj.contains(k), s"$c.$k")
+    assert(j("node_cache")("hits").num + j("node_cache")("misses").num == j("node_accesses").num)
+    assert(j("node_bytes_per_ray").num < j("node_bytes_per_ray_nocache").num)
+    assert(j("prim_bytes_per_ray").num <= j("prim_bytes_per_ray_nocache").num)
+    val (c0, out0, _) = sim()
+    val j0 = ujson.read(out0.trim.linesIterator.toSeq.last)
+    assert(c0 == 0 && j0("node_cache")("hits").num == 0 && j0("prim_cache")("misses").num == 0)
+    assert(j0("node_bytes_per_ray").num == j0("node_bytes_per_ray_nocache").num)
+  }
+
+  test("bad cache values: one error line, status 2") {
+    for ((name, args) <- Seq(
+      "entries not a power of two" -> Seq("--node-cache", "100"),
+      "unknown policy" -> Seq("--node-cache", "64", "--node-policy", "fifo"),
+      "MAX_LEVEL out of range" -> Seq("--node-cache", "64", "--max-level", "16"),
+      "negative entries" -> Seq("--prim-cache", "-4"),
+      "ways with dm" -> Seq("--node-cache", "64", "--node-ways", "4", "--node-policy", "dm"),
+      "ways not dividing lines" -> Seq("--prim-cache", "8", "--prim-ways", "4"),
+      "TUS zero" -> Seq("--tus", "0")
+    )) {
+      val (code, out, err) = sim(args: _*)
+      assert(code == 2, name)
+      assert(err.linesIterator.count(_.startsWith("error:")) == 1 && err.trim.linesIterator.size == 1, s"$name: $err")
+      assert(out.isEmpty, name)
+    }
+  }
+}
