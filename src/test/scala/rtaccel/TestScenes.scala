@@ -35,6 +35,16 @@ object TestScenes {
     Rays(d)
   }
 
+  /** Writes a float32 .npy (C order) for entry-point tests. */
+  def saveFloats(dir: Path, name: String, data: Array[Float], shape: Seq[Int]): Path = {
+    val p = dir.resolve(name)
+    rtaccel.io.Npy.write(p, "'<f4'", shape, bb => data.foreach(bb.putFloat), data.length * 4); p
+  }
+
+  /** tris.npy and rays.npy in `dir`, as the Makefile hands them to the entry points. */
+  def writeInputs(dir: Path, scene: Scene, rays: Rays): (Path, Path) =
+    (saveFloats(dir, "tris.npy", scene.coords, Seq(scene.triangles, 3, 3)), saveFloats(dir, "rays.npy", rays.data, Seq(rays.count, 8)))
+
   val fixtureRoot: Option[Path] = sys.env.get("RTACCEL_FIXTURES").map(Paths.get(_)).filter(Files.isDirectory(_))
   val fixtureNames: Seq[String] = Seq("cornell", "hairball", "soup", "extreme")
 

@@ -1,19 +1,14 @@
 package rtaccel.cli
 
-import java.nio.file.{Files, Path}
+import java.nio.file.Files
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
-import rtaccel.io.Npy
 
 class CacheSimSpec extends AnyFunSuite {
   private val dir = Files.createTempDirectory("cachesimspec")
-  private def save(name: String, data: Array[Float], shape: Seq[Int]): Path = {
-    val p = dir.resolve(name); Npy.write(p, "'<f4'", shape, bb => data.foreach(bb.putFloat), data.length * 4); p
-  }
   private val scene = TestScenes.soup(3, 500)
-  private val tris = save("tris.npy", scene.coords, Seq(scene.triangles, 3, 3))
   private val rays = TestScenes.rays(4, 300)
-  private val raysPath = save("rays.npy", rays.data, Seq(rays.count, 8))
+  private val (tris, raysPath) = TestScenes.writeInputs(dir, scene, rays)
   private def sim(extra: String*): (Int, String, String) = {
     val out = new java.io.ByteArrayOutputStream(); val err = new java.io.ByteArrayOutputStream()
     val code = Console.withOut(out)(Console.withErr(err)(

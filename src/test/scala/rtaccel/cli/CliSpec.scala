@@ -3,17 +3,13 @@ package rtaccel.cli
 import java.nio.file.{Files, Path}
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
-import rtaccel.io.Npy
 
 class CliSpec extends AnyFunSuite {
   private val dir = Files.createTempDirectory("clispec")
-  private def save(name: String, data: Array[Float], shape: Seq[Int]): Path = {
-    val p = dir.resolve(name); Npy.write(p, "'<f4'", shape, bb => data.foreach(bb.putFloat), data.length * 4); p
-  }
+  private def save(name: String, data: Array[Float], shape: Seq[Int]): Path = TestScenes.saveFloats(dir, name, data, shape)
   private val scene = TestScenes.soup(2, 300)
-  private val tris = save("tris.npy", scene.coords, Seq(scene.triangles, 3, 3))
   private val rays = TestScenes.rays(3, 100)
-  private val raysPath = save("rays.npy", rays.data, Seq(rays.count, 8))
+  private val (tris, raysPath) = TestScenes.writeInputs(dir, scene, rays)
   private def trace(out: Path, extra: String*) =
     Cli.status(Array("--tris", tris.toString, "--rays", raysPath.toString, "--out", out.toString) ++ extra)(a => Trace.main0(a))
 
