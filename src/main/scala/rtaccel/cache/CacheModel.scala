@@ -59,15 +59,20 @@ final class CacheModel(val c: CacheParams, lineOf: Int => Int = identity, entrie
     else {
       val set = line & setMask
       val base = set * ways
-      var w = 0
-      while (w < ways) {
-        if (tags(base + w) == line) { hits += 1; state(set) = policy.touch(state(set), w); return true }
-        w += 1
-      }
+      if (lookup(tags, state, policy, base, set, ways, line)) { hits += 1; return true }
       misses += 1
       if (!fill(tags, lvls, state, policy, base, set, ways, line, level, isLrp)) bypasses += 1
       false
     }
+  }
+
+  /** Looks `line` up in the set at `base`; a hit updates the set's replacement state. */
+  private def lookup(tg: Array[Int], st: Array[Int], pol: ReplacementPolicy, base: Int, set: Int, nWays: Int,
+                     line: Int): Boolean = {
+    var w = 0
+    while (w < nWays && tg(base + w) != line) w += 1
+    if (w < nWays) st(set) = pol.touch(st(set), w)
+    w < nWays
   }
 
   /** Fills `line` into the set at `base` (empty way first, lowest first; else the policy victim, subject to the
@@ -90,11 +95,7 @@ final class CacheModel(val c: CacheParams, lineOf: Int => Int = identity, entrie
     if (tags(i) == line) { hits += 1; return true }
     val sset = line & (sideSets - 1)
     val sbase = sset * sideWays
-    var w = 0
-    while (w < sideWays) {
-      if (sTags(sbase + w) == line) { hits += 1; sState(sset) = side.touch(sState(sset), w); return true }
-      w += 1
-    }
+    if (lookup(sTags, sState, side, sbase, sset, sideWays, line)) { hits += 1; return true }
     misses += 1
     if (tags(i) == -1 || LevelPolicy.allocate(lvls(i), level, maxLevel)) { tags(i) = line; lvls(i) = level }
     else if (!fill(sTags, sLvls, sState, side, sbase, sset, sideWays, line, level, lrp = true)) bypasses += 1

@@ -61,9 +61,6 @@ object Cli {
   }
 
   def writeText(path: Path, text: String): Unit = Npy.atomicWrite(path, text.getBytes("UTF-8"))
-
-  def provenance(b: Built, sceneLabel: String): String =
-    s"# scene=$sceneLabel triangles=${b.scene.triangles} config=${b.params.name} M=${b.params.m} MPPL=${b.params.mppl} rtaccel=$version\n"
 }
 
 /** `--key value` arguments; every value a command reads is validated where it is read. */
