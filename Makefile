@@ -21,6 +21,7 @@ DEPTH   ?= 5
 SEED    ?= 1
 SHARED_SCENES ?= $(abspath ../shared/scenes)
 RUN_CONFIG ?= paper2017
+RUN_NODE_CACHE ?= 8192
 MODEL_ARGS = --config $(CONFIG) --m $(M) --mppl $(MPPL)
 TRIS       = $$(tools/tris $(SCENE))
 
@@ -64,7 +65,7 @@ run: deps build/scenes/cornell.obj
 	@$(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=build/run/golden
 	@$(MAKE) --no-print-directory check SCENE=$(SCENE) GOLDEN=build/run/golden | tee build/run/check.log
 	@$(MAKE) --no-print-directory analyze SCENE=$(SCENE) GOLDEN=build/run/golden OUT=build/run/analysis | tee build/run/analyze.log
-	@$(MAKE) --no-print-directory simulate SCENE=$(SCENE) GOLDEN=build/run/golden CONFIG=$(RUN_CONFIG) OUT=build/run/simulate | tee build/run/simulate.log
+	@$(MAKE) --no-print-directory simulate SCENE=$(SCENE) GOLDEN=build/run/golden CONFIG=$(RUN_CONFIG) NODE_CACHE=$(RUN_NODE_CACHE) OUT=build/run/simulate | tee build/run/simulate.log
 	@$(PY) -m dse.run_summary build/run
 
 # ---------------------------------------------------------------- user commands
@@ -79,9 +80,11 @@ trace: deps
 	@T=$(TRIS) && $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $(RAYS) --out $(OUT) $(MODEL_ARGS)
 
 # Node/primitive cache models on the traversal's accesses (docs/caches.md). Last stdout line: JSON.
-CACHE_ARGS = --tus $(or $(TUS),1) --node-cache $(or $(NODE_CACHE),0) --node-ways $(or $(NODE_WAYS),1) \
+# CACHE_FLAGS: the cache geometry, shared by cachesim and simulate (absent NODE_CACHE/PRIM_CACHE = no cache).
+CACHE_FLAGS = --node-cache $(or $(NODE_CACHE),0) --node-ways $(or $(NODE_WAYS),1) \
   --max-level $(or $(MAX_LEVEL),15) --prim-cache $(or $(PRIM_CACHE),0) --prim-ways $(or $(PRIM_WAYS),1) \
-  $(if $(NODE_POLICY),--node-policy $(NODE_POLICY)) $(if $(PRIM_POLICY),--prim-policy $(PRIM_POLICY)) $(if $(SWEEP),--sweep-out $(SWEEP))
+  $(if $(NODE_POLICY),--node-policy $(NODE_POLICY)) $(if $(PRIM_POLICY),--prim-policy $(PRIM_POLICY))
+CACHE_ARGS = --tus $(or $(TUS),1) $(CACHE_FLAGS) $(if $(SWEEP),--sweep-out $(SWEEP))
 cachesim: deps
 	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
 	  T=$(TRIS) && $(JAVA) rtaccel.cli.CacheSim --tris "$$T" --scene-label $(SCENE) --rays $$R $(MODEL_ARGS) $(CACHE_ARGS)
@@ -114,7 +117,7 @@ bench: deps
 VCONFIG = $(if $(filter fit,$(CONFIG)),paper2017,$(CONFIG))
 TUS_ARG = $(if $(TUS),--tus $(TUS))
 verilog: deps
-	$(JAVA) rtaccel.cli.EmitVerilog --config $(VCONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) --out build/$(VCONFIG)
+	$(JAVA) rtaccel.cli.EmitVerilog --config $(VCONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) $(CACHE_FLAGS) --out build/$(VCONFIG)
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.
 LINT_WAIVERS = tools/lint.vlt
@@ -125,7 +128,7 @@ SIM_ARGS = $(if $(MEM_JITTER),--mem-jitter $(MEM_JITTER)) $(if $(HOST_STALL),--h
 simulate: deps
 	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
 	  OUT=$${OUT:-build/simulate/$$(basename $(SCENE))}; T=$(TRIS) && \
-	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT --config $(CONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) $(SIM_ARGS)
+	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT --config $(CONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) $(SIM_ARGS) $(CACHE_FLAGS)
 
 regress: deps
 	RTACCEL_REGRESS=full $(SBT) "testOnly rtaccel.top.PlatformSpec"

@@ -38,6 +38,13 @@ def main(run_dir: str) -> None:
               f"{100 * sim['mem_utilisation']:.1f}% of peak")
         print(f"            vs model: mismatch {sim['mismatch_vs_model']}, lost {sim['lost']}, duplicated {sim['duplicated']}; "
               f"simulated {sim['sim_cycles_per_wall_s']:.3g} cycles per wall second")
+        for name in ("node_cache", "prim_cache"):
+            c = sim.get(name) or {}
+            if c.get("entries"):
+                same = c["model_same_order"]
+                print(f"{name.replace('_', ' '):<11} {c['entries']} entries {c['ways']}-way {c['policy']}: hits {c['hits']:.0f}, "
+                      f"misses {c['misses']:.0f} (miss rate {100 * c['miss_rate']:.2f}%); trace model on the RTL's order: "
+                      f"hits {same['hits']:.0f}, misses {same['misses']:.0f}")
     print(f"outputs     {d}/golden, {d}/analysis (CSV + PNG), {d}/simulate")
     print(json.dumps({"scene": meta.get("scene"), "rays": check["rays"], "agree": check["agree"],
                       "unexplained": check["unexplained"], "node_bytes_per_ray": bpr[k]["node"],
@@ -45,7 +52,9 @@ def main(run_dir: str) -> None:
                       "top4_levels_access_share": analysis["top4_levels_access_share"],
                       **({"rtl_cycles": sim["cycles"], "rtl_rays_per_s": sim["rays_per_s_at_clock"],
                           "rtl_mismatch_vs_model": sim["mismatch_vs_model"], "rtl_lost": sim["lost"],
-                          "mem_utilisation": sim["mem_utilisation"]} if sim else {})}))
+                          "mem_utilisation": sim["mem_utilisation"],
+                          "node_cache": sim.get("node_cache", {}), "prim_cache": sim.get("prim_cache", {}),
+                          "cache_counts_match_model": sim.get("cache_counts_match_model")} if sim else {})}))
 
 
 if __name__ == "__main__":

@@ -33,6 +33,20 @@ final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[C
   * of N concurrent rays' access streams at a shared cache, not cycle-accurate arbitration.
   */
 object Replay {
+  /** Replays child references in the order the RTL's memory controller accepted them (its access log): node
+    * refs carry their level field (saturated to 4 bits, as the RTL caches see it), leaf refs their first slot
+    * and count. Ray numbers are not in the log (-1).
+    */
+  def refs(log: Array[Int], codec: rtaccel.bvh.RefCodec, sink: AccessSink): Unit = {
+    var i = 0
+    while (i < log.length) {
+      val r = log(i)
+      if (codec.isPrim(r)) sink.leaf(-1, codec.firstPrim(r), codec.count(r), 0)
+      else sink.node(-1, codec.nodeId(r), rtaccel.cache.policy.LevelPolicy.encode(codec.level(r)))
+      i += 1
+    }
+  }
+
   def interleaved(rows: Array[Int], tus: Int, sink: AccessSink): Unit = {
     require(tus >= 1, s"TUS must be at least 1 (got $tus)")
     val n = rows.length / 5

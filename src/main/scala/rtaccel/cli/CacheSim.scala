@@ -15,25 +15,17 @@ import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
 object CacheSim {
   def main(args: Array[String]): Unit = Cli.run(args)(main0)
 
-  def cacheArg(a: Args, prefix: String, policyDefault: String): CacheParams = {
-    val entries = a.int(s"$prefix-cache", 0)
-    if (entries < 0) throw new InputError(s"--$prefix-cache must be >= 0 (got $entries)")
-    val ways = a.int(s"$prefix-ways", 1)
-    val pol = a.get(s"$prefix-policy", if (policyDefault.nonEmpty) policyDefault else if (ways == 1) "dm" else "lru")
-    CacheParams(entries = entries, ways = ways, policy = pol, maxLevel = a.int("max-level", 15))
-  }
-
   def models(p: PlatformParams, node: CacheParams, prim: CacheParams): (Option[CacheModel], Option[CacheModel]) = (
     if (node.entries > 0) Some(new CacheModel(node)) else None,
     if (prim.entries > 0) Some(new CacheModel(prim, identity, p.mppl)) else None)
 
   def main0(a: Args): Unit = {
-    val node = cacheArg(a, "node", "")
-    val prim = cacheArg(a, "prim", "")
+    val node = Cli.cacheArg(a, "node")
+    val prim = Cli.cacheArg(a, "prim")
     val tus = a.int("tus", 1)
     if (tus < 1 || tus > 1024) throw new InputError(s"TUS must be in 1..1024 (got $tus)")
     val (scene, rays, _) = Cli.inputs(a)
-    val b = Cli.build(scene, Cli.params(a).copy(nodeCache = node, primCache = prim), Cli.fitRequested(a))
+    val b = Cli.build(scene, Cli.params(a), Cli.fitRequested(a))
     val p = b.params
     models(p, node, prim) // validate geometry before the traversal runs
     val img = MemoryImage.pack(b.bvh, b.scene, p)

@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import java.nio.file.{Path, Paths}
-import rtaccel.config.{Fit, PlatformParams, Presets}
+import rtaccel.config.{CacheParams, Fit, PlatformParams, Presets}
 import rtaccel.bvh.Mbvh
 import rtaccel.io.{InputError, Npy}
 import rtaccel.scene.{Normalize, Rays, Scene}
@@ -37,7 +37,20 @@ object Cli {
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
-      stackDepth = a.int("stack-depth", base.stackDepth))
+      stackDepth = a.int("stack-depth", base.stackDepth),
+      nodeCache = cacheArg(a, "node"), primCache = cacheArg(a, "prim"))
+  }
+
+  /** NODE_CACHE/NODE_WAYS/NODE_POLICY (or PRIM_...) and MAX_LEVEL. Absent --<prefix>-cache means no cache:
+    * a preset's own cache (paper2017: 2^13 DM) is used only when asked for, so every command's default is
+    * the uncached platform. Policy default: dm for one way, lru otherwise.
+    */
+  def cacheArg(a: Args, prefix: String): CacheParams = {
+    val entries = a.int(s"$prefix-cache", 0)
+    if (entries < 0) throw new InputError(s"--$prefix-cache must be >= 0 (got $entries)")
+    val ways = a.int(s"$prefix-ways", 1)
+    val pol = a.get(s"$prefix-policy", if (ways == 1) "dm" else "lru")
+    CacheParams(entries = entries, ways = ways, policy = pol, maxLevel = a.int("max-level", 15))
   }
 
   final case class Built(scene: Scene, params: PlatformParams, bvh: Mbvh, buildSeconds: Double)

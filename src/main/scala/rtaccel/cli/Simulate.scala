@@ -10,7 +10,8 @@ import rtaccel.bvh.MemoryImage
 import rtaccel.config.PlatformParams
 import rtaccel.io.InputError
 import rtaccel.mc.AxiParams
-import rtaccel.model.{AccessSink, RayStats, Traversal}
+import rtaccel.cache.hw.CachePath
+import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
 import rtaccel.scene.{Hits, Rays}
 import rtaccel.sim.{DramConfig, ImageFile, RaysFile, SimHarness, SimSetup}
 import rtaccel.top.{RegMap, RtAccelTop}
@@ -45,9 +46,15 @@ object Simulate {
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
   def run(b: Cli.Built, rays: Rays, o: SimOptions): Outcome = {
     val p = b.params
+    CachePath.validate(p)
+    val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
     val img = MemoryImage.pack(b.bvh, b.scene, p)
     val stats = new RayStats
-    val model = new Traversal(img).traceAll(rays, AccessSink.none, stats)
+    val rec = new AccessRecorder
+    val model = new Traversal(img).traceAll(rays, if (cached) rec else AccessSink.none, stats)
+    val accessRows = rec.toArray
+    // the RTL logs its access order only when a cache is present; it makes exactly the model's accesses
+    val logCap = if (cached) SimSetup.pow2(math.max(1, accessRows.length / 5)) else 0
     val label = o.label
     val axi = AxiParams(dataBits = p.axiDataBits)
     val den = 1000
@@ -59,14 +66,15 @@ object Simulate {
     val r = p.refs
     val key = s"tus${p.tus}-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
-      s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}"
+      s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" +
+      (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "")
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
     val layout = ImageFile.write(img, axi, work.resolve("image.hex"))
     require(layout.words <= wordCap, s"image of ${layout.words} words exceeds the simulator's $wordCap")
     RaysFile.write(rays, work.resolve("rays.hex"))
     val setup = SimSetup(rayCap, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
-      wordCap, dram, hostStallPercent = o.hostStall, seed = o.seed)
+      wordCap, dram, hostStallPercent = o.hostStall, seed = o.seed, accessLogCapacity = logCap)
     val maxCycles = o.maxCycles.getOrElse(1000000L + 200000L * rays.count)
     System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build in $work")
 
@@ -77,6 +85,7 @@ object Simulate {
       dut.clock.setTimeout(0)
       dut.io.rayCount.poke(rays.count.U)
       dut.io.primBase.poke(layout.primBaseBytes.U)
+      dut.io.maxLevel.poke(p.nodeCache.maxLevel.U) // MAX_LEVEL is a runtime register, not part of the circuit
       dut.io.readIdx.poke(0.U); dut.io.regAddr.poke(0.U)
       val tSim = System.nanoTime()
       var stepped = 0L
@@ -114,6 +123,14 @@ object Simulate {
       val mismatch = (0 until rays.count).count(i => seen(i) >= 1 && (hits.prim(i) != model.prim(i) ||
         bits(hits.t(i)) != bits(model.t(i)) || bits(hits.u(i)) != bits(model.u(i)) || bits(hits.v(i)) != bits(model.v(i))))
       val lost = seen.count(_ == 0)
+      // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
+      // and against the model's N-TU interleaved order (the fast model's prediction)
+      val logged = if (!cached) Array.empty[Int] else {
+        val nLog = dut.io.logCount.peek().litValue.toInt
+        if (nLog > logCap) throw new InputError(s"the RTL made $nLog accesses, more than the model's ${accessRows.length / 5}")
+        Array.tabulate(nLog) { k => dut.io.readIdx.poke(k.U); dut.io.logData.peek().litValue.toInt }
+      }
+      val cacheJson = CacheReport.simulate(p, counters, logged, accessRows, img.codec)
       val duplicated = seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond
@@ -132,6 +149,8 @@ object Simulate {
         "timed_out" -> (received < rays.count), "normalize_exponent" -> o.scaleExp,
         "mem_jitter" -> dram.randomExtraLatency, "host_stall_percent" -> setup.hostStallPercent,
         "counters" -> ujson.Obj.from(counters.map { case (k, v) => k -> ujson.Num(v.toDouble) }),
+        "dram_bytes_per_ray" -> counters("mem_busy_beats") * axi.beatBytes / n,
+        "node_cache" -> cacheJson.node, "prim_cache" -> cacheJson.prim, "cache_counts_match_model" -> cacheJson.matches,
         "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> Cli.version)
       result = Outcome(json, hits)
     }

@@ -21,13 +21,16 @@ object Fit {
     stackDepth = math.max(1, bvh.stackBound),
     nodes = bvh.numNodes, prims = bvh.numPrims, maxLevel = bvh.maxLevel)
 
+  /** Cache policies that read the node level from the reference. */
+  def levelAware(p: PlatformParams): Boolean = p.nodeCache.entries > 0 && Set("lrp", "hybrid")(p.nodeCache.policy)
+
   /** The smallest configuration of `p`'s kind that holds the scene; the level field is kept only when the
-    * config had one (level-aware cache policies), and then sized so no level saturates.
+    * config had one or its node cache is level-aware, and then sized so no level saturates.
     */
   def fitTo(p: PlatformParams, bvh: Mbvh): PlatformParams = {
     val n = needs(bvh)
     p.copy(name = if (p.name.endsWith("fit")) p.name else s"${p.name}-fit",
-      refs = RefFormat(n.nodeIdBits, n.primIndexBits, n.countBits, if (p.refs.levelBits == 0) 0 else n.levelBits),
+      refs = RefFormat(n.nodeIdBits, n.primIndexBits, n.countBits, if (p.refs.levelBits == 0 && !levelAware(p)) 0 else n.levelBits),
       stackDepth = n.stackDepth)
   }
 
@@ -40,6 +43,9 @@ object Fit {
       refuse("node id field", s"${n.nodeIdBits} bits (${n.nodes} nodes)", s"${p.refs.nodeIdBits} bits", "use CONFIG=fit or widen nodeIdBits")
     if (n.primIndexBits > p.refs.primIndexBits)
       refuse("primitive index field", s"${n.primIndexBits} bits (${n.prims} primitives)", s"${p.refs.primIndexBits} bits", "use CONFIG=fit or widen primIndexBits")
+    if (levelAware(p) && p.refs.levelBits == 0)
+      throw new InputError(s"NODE_POLICY=${p.nodeCache.policy} reads each node's level from its reference, but config '${p.name}' " +
+        "has no level field; use CONFIG=paper2017-lrp or CONFIG=fit")
     if (n.stackDepth > p.stackDepth)
       refuse("traversal stack", s"${n.stackDepth} entries (tree of ${n.maxLevel + 1} levels)", s"${p.stackDepth} entries", "raise stackDepth, raise MPPL or use CONFIG=fit")
   }

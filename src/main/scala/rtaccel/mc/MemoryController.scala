@@ -23,6 +23,23 @@ class MemReq(addrBits: Int, beatsBits: Int) extends Bundle {
   val beats = UInt(beatsBits.W)
 }
 
+/** A request as a path sees it: the DRAM read plus what a cache needs to place it. `line` is the node id
+  * (node path) or the leaf's first primitive slot (primitive path); `level` is the node's tree level from its
+  * reference, saturated to 4 bits as in the paper's Section 7.2 encoding (0 for leaves and when the reference
+  * format has no level field).
+  */
+class PathReq(addrBits: Int, beatsBits: Int) extends MemReq(addrBits, beatsBits) {
+  val line = UInt(32.W)
+  val level = UInt(4.W)
+}
+
+/** Hit/miss counters a path reports (all zero for the pass-through). */
+class PathStats extends Bundle {
+  val hits = UInt(48.W)
+  val misses = UInt(48.W)
+  val bypasses = UInt(48.W)
+}
+
 /** Sizes shared by the MC and its paths. */
 final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   require(axi.beatBytes <= p.primStrideBytes && axi.beatBytes <= p.nodeStrideBytes,
@@ -32,6 +49,7 @@ final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   val maxBeats: Int = math.max(nodeBeats, p.refs.maxLeafPrims * primBeats)
   val beatsBits: Int = log2Ceil(maxBeats + 1)
   def memReq = new MemReq(axi.addrBits, beatsBits)
+  def pathReq = new PathReq(axi.addrBits, beatsBits)
 }
 
 /** The interface a node or primitive cache implements to plug into the MC.
@@ -44,7 +62,10 @@ final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   * which guarantees that every R beat has room to land and the shared in-order R channel never blocks.
   */
 class FetchPathIO(g: McGeometry) extends Bundle {
-  val in = Flipped(Decoupled(g.memReq))
+  val in = Flipped(Decoupled(g.pathReq))
+  val primBase = Input(UInt(g.axi.addrBits.W))
+  val maxLevel = Input(UInt(4.W))
+  val stats = Output(new PathStats)
   val memReq = Decoupled(g.memReq)
   val memResp = Flipped(Decoupled(new FetchBeat(g.axi.dataBits)))
   val out = Decoupled(new FetchBeat(g.axi.dataBits))
@@ -57,8 +78,12 @@ abstract class FetchPathModule(val g: McGeometry) extends Module {
 
 /** For now a pass-through: every request goes to DRAM, every beat straight back. */
 class FetchPath(g: McGeometry) extends FetchPathModule(g) {
-  io.memReq <> io.in
+  io.memReq.valid := io.in.valid
+  io.memReq.bits.addr := io.in.bits.addr
+  io.memReq.bits.beats := io.in.bits.beats
+  io.in.ready := io.memReq.ready
   io.out <> io.memResp
+  io.stats := 0.U.asTypeOf(new PathStats)
 }
 
 object FetchPath {
@@ -142,7 +167,10 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     val req = Flipped(Decoupled(new FetchReq))
     val resp = Decoupled(new FetchBeat(ap.dataBits))
     val primBase = Input(UInt(ap.addrBits.W))
+    val maxLevel = Input(UInt(4.W)) // MAX_LEVEL register of the level replacement policy
     val axi = new AxiReadMaster(ap)
+    val nodeCache = Output(new PathStats)
+    val primCache = Output(new PathStats)
     val nodeRequests = Output(UInt(48.W))
     val leafRequests = Output(UInt(48.W))
     val primsRequested = Output(UInt(48.W))
@@ -167,6 +195,10 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
   val nodeAddr = toAddr(nodeId << log2Ceil(p.nodeStrideBytes))
   val primAddr = toAddr(io.primBase +& (first << log2Ceil(p.primStrideBytes)))
   val primBeatsLog = log2Ceil(g.primBeats)
+  // the node's level field, saturated to the 4-bit code every cache policy works with
+  val nodeLevel: UInt =
+    if (f.levelBits == 0) 0.U(4.W)
+    else { val l = ref(f.nodeIdBits + f.levelBits - 1, f.nodeIdBits); Mux(l > 15.U, 15.U, l)(3, 0) }
 
   // ---- paths and dispatch (order FIFO: path of every request in flight)
   val paths = Seq.tabulate(2)(i => Module(pathFactory(g, i)))
@@ -181,7 +213,13 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     path.io.in.valid := io.req.valid && order.io.enq.ready && target === i.U
     path.io.in.bits.addr := (if (i == NodePath) nodeAddr else primAddr)
     path.io.in.bits.beats := (if (i == NodePath) g.nodeBeats.U else (count << primBeatsLog))
+    path.io.in.bits.line := (if (i == NodePath) nodeId else first).pad(32)
+    path.io.in.bits.level := (if (i == NodePath) nodeLevel else 0.U)
+    path.io.primBase := io.primBase
+    path.io.maxLevel := io.maxLevel
   }
+  io.nodeCache := paths(NodePath).io.stats
+  io.primCache := paths(PrimPath).io.stats
 
   // ---- DRAM side: arbiter -> burst splitter -> AR; R routed back by the memory-order FIFO
   val arb = Module(new RRArbiter(g.memReq, 2))

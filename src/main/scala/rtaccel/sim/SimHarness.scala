@@ -12,7 +12,8 @@ import rtaccel.top.{RegMap, RtAccelTop}
   * ray count and the primitive base address are inputs, not parameters, for the same reason.
   */
 final case class SimSetup(rayCapacity: Int, raysHex: String, imageHex: String, imageWords: Int,
-                          dram: DramConfig, hostStallPercent: Int = 0, seed: Int = 1) {
+                          dram: DramConfig, hostStallPercent: Int = 0, seed: Int = 1, accessLogCapacity: Int = 0) {
+  require(accessLogCapacity == 0 || Integer.bitCount(accessLogCapacity) == 1, "access log capacity must be 0 or a power of two")
   require(rayCapacity >= 1 && Integer.bitCount(rayCapacity) == 1, "ray capacity must be a power of two")
   require(imageWords >= 1 && Integer.bitCount(imageWords) == 1, "image capacity must be a power of two")
   require(hostStallPercent >= 0 && hostStallPercent < 100, "host stall percentage must be 0..99")
@@ -25,11 +26,15 @@ object SimSetup {
 /** Simulation-only wrapper: the board top with the rays in a ROM, the memory image in a DRAM model and the
   * hits captured in a RAM, so that a whole scene runs without per-cycle work in Scala. The host side can
   * refuse hits at random (backpressure). Results are read out through `readIdx`/`readData` at the end.
+  * With accessLogCapacity > 0 every child reference the MC accepts is logged in order (`logCount`, read out
+  * through `readIdx`/`logData`): the access order the caches saw, for replay through the trace model.
+  * The host writes PRIM_BASE and then MAX_LEVEL (from the inputs) before the first ray.
   */
 class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   val io = IO(new Bundle {
     val rayCount = Input(UInt(32.W))
     val primBase = Input(UInt(64.W))
+    val maxLevel = Input(UInt(4.W))
     val received = Output(UInt(32.W))
     val sent = Output(UInt(32.W))
     val doneCycle = Output(UInt(64.W)) // cycles until the last hit arrived (counting stops there)
@@ -37,16 +42,20 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val readData = Output(UInt(RtAccelTop.HitBits.W))
     val regAddr = Input(UInt(8.W))
     val regData = Output(UInt(64.W))
+    val logCount = Output(UInt(32.W))
+    val logData = Output(UInt(32.W))
   })
-  val top = Module(new RtAccelTop(p))
+  val top = Module(new RtAccelTop(p, tapAccesses = s.accessLogCapacity > 0))
   val dram = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, s.dram))
   dram.io.axi <> top.io.mem
 
-  val started = RegInit(false.B)
-  started := true.B
+  // two register writes, one per cycle, then rays flow
+  val setupStep = RegInit(0.U(2.W))
+  val started = setupStep === 2.U
+  when(!started) { setupStep := setupStep + 1.U }
   top.io.regs.wr.valid := !started
-  top.io.regs.wr.bits.addr := RegMap.PrimBase.U
-  top.io.regs.wr.bits.data := io.primBase
+  top.io.regs.wr.bits.addr := Mux(setupStep === 0.U, RegMap.PrimBase.U, RegMap.MaxLevel.U)
+  top.io.regs.wr.bits.data := Mux(setupStep === 0.U, io.primBase, io.maxLevel.pad(64))
   top.io.regs.rdAddr := io.regAddr
   io.regData := top.io.regs.rdData
 
@@ -73,4 +82,16 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   io.received := received
   io.sent := sent
   io.readData := hits(io.readIdx)
+
+  val logCount = RegInit(0.U(32.W))
+  io.logCount := logCount
+  io.logData := 0.U
+  top.io.tap.foreach { t =>
+    val log = Mem(s.accessLogCapacity, UInt(32.W))
+    when(t.valid) {
+      when(logCount < s.accessLogCapacity.U) { log(logCount) := t.bits }
+      logCount := logCount + 1.U
+    }
+    io.logData := log(io.readIdx)
+  }
 }

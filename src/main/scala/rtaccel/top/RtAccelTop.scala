@@ -4,7 +4,8 @@ import chisel3._
 import chisel3.util._
 import rtaccel.config.PlatformParams
 import rtaccel.iu.IntersectionUnit
-import rtaccel.mc.{AxiParams, AxiReadMaster, MemoryController}
+import rtaccel.cache.hw.CachePath
+import rtaccel.mc.{AxiParams, AxiReadMaster, McGeometry, MemoryController}
 import rtaccel.tc.TraversalController
 import rtaccel.tu.TraversalUnit
 
@@ -23,28 +24,36 @@ object RtAccelTop {
   val eventNames: Seq[String] = Seq("cycles", "busy_cycles", "rays_in", "hits_out", "stall_iu_arbitration",
     "stall_memory_request", "stall_memory_data", "stall_host_backpressure", "tu_busy_cycles")
   /** Counted by the memory controller (not cleared by the control register). */
-  val memoryNames: Seq[String] = Seq("node_requests", "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats")
+  val memoryNames: Seq[String] = Seq("node_requests", "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats",
+    "node_cache_hits", "node_cache_misses", "node_cache_bypasses", "prim_cache_hits", "prim_cache_misses", "prim_cache_bypasses")
   val counterNames: Seq[String] = eventNames ++ memoryNames
 }
 
 /** Board top (paper Fig 1, with the PCIe communication controller replaced by AXI4-Stream): rays in, hits
   * out, an AXI4 read master to onboard memory, and a register port for configuration and counters.
+  * The node and primitive caches of p.nodeCache / p.primCache sit in the MC (none when entries = 0).
+  * tapAccesses (simulation): `tap` shows every child reference the MC accepts, so a harness can log the
+  * access order the caches saw and replay it through the trace model.
   */
-class RtAccelTop(p: PlatformParams) extends Module {
+class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module {
   val axiP = AxiParams(dataBits = p.axiDataBits)
   val io = IO(new Bundle {
     val rays = Flipped(Decoupled(new AxisBeat(RtAccelTop.RayBits)))
     val hits = Decoupled(new AxisBeat(RtAccelTop.HitBits))
     val mem = new AxiReadMaster(axiP)
     val regs = new RegPort
+    val tap = if (tapAccesses) Some(Output(Valid(UInt(32.W)))) else None
   })
   val tc = Module(new TraversalController(p))
   val tus = Seq.fill(p.tus)(Module(new TraversalUnit(p)))
   val iu = Module(new IntersectionUnit(p, axiP.dataBits))
-  val mc = Module(new MemoryController(p, axiP))
+  private val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
+  // caches reorder DRAM traffic between the paths: give each path a response buffer (see MemoryController)
+  val mc = Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
+    respBufferBeats = if (cached) 2 * McGeometry(p, axiP).maxBeats else 0))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   val configWord = BigInt(p.m) | (BigInt(p.refs.maxLeafPrims) << 8) | (BigInt(p.tus) << 16) | (BigInt(p.stackDepth) << 32)
-  val regs = Module(new RegFile(configWord, RtAccelTop.counterNames, axiP.addrBits))
+  val regs = Module(new RegFile(configWord, RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel))
   regs.io.port <> io.regs
 
   // host stream -> TC
@@ -69,6 +78,8 @@ class RtAccelTop(p: PlatformParams) extends Module {
   mc.io.req <> iu.io.mem.req
   iu.io.mem.resp <> mc.io.resp
   mc.io.primBase := regs.io.primBase
+  mc.io.maxLevel := regs.io.maxLevel
+  io.tap.foreach { t => t.valid := mc.io.req.fire; t.bits := mc.io.req.bits.childRef }
   io.mem <> mc.io.axi
 
   // counters
@@ -86,5 +97,6 @@ class RtAccelTop(p: PlatformParams) extends Module {
     "tu_busy_cycles" -> ev(PopCount(tuBusy)))
   for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := events(n)
   regs.io.counters := VecInit(perf.io.values ++ Seq(mc.io.nodeRequests, mc.io.leafRequests, mc.io.primsRequested,
-    mc.io.bytesRequested, mc.io.busyBeats).map(_.pad(64)))
+    mc.io.bytesRequested, mc.io.busyBeats, mc.io.nodeCache.hits, mc.io.nodeCache.misses, mc.io.nodeCache.bypasses,
+    mc.io.primCache.hits, mc.io.primCache.misses, mc.io.primCache.bypasses).map(_.pad(64)))
 }

@@ -1,0 +1,209 @@
+package rtaccel.cache.hw
+
+import chisel3._
+import chisel3.util._
+import rtaccel.cache.policy.Policies
+import rtaccel.config.CacheParams
+import rtaccel.mc.{FetchBeat, FetchPath, FetchPathModule, McGeometry, PathReq}
+
+/** Geometry of one cache in front of a path. A line holds one request: a node, or a leaf of up to
+  * `entriesPerLine` (= MPPL) primitives, so lines = entries / entriesPerLine as in the trace model.
+  */
+final case class CacheGeometry(c: CacheParams, entriesPerLine: Int, lineBeats: Int, strideBytes: Int) {
+  require(c.entries > 0, "a cache path needs entries > 0")
+  val lines: Int = math.max(1, c.entries / entriesPerLine)
+  require(Integer.bitCount(lines) == 1, s"cache lines ($lines) must be a power of two")
+  require(lines % c.ways == 0, s"cache ways (${c.ways}) must divide its lines ($lines)")
+  val beatBits: Int = log2Ceil(lineBeats)
+  /** hybrid: the complementary LRP cache beside the direct-mapped array (same sizes as CacheModel) */
+  val sideLines: Int = if (c.policy == "hybrid") math.max(1, lines / 8) else 0
+  val sideWays: Int = if (c.policy == "hybrid") math.min(4, sideLines) else 0
+  val dataLines: Int = lines + sideLines
+}
+
+/** A node or primitive cache as an MC fetch path (paper Sections 6-8). Policies dm, lru, plru, lrp (set-
+  * associative, TagArray), bf (static buffer of lines 0..lines-1, preloaded from DRAM before the first request
+  * is served, never replaced) and hybrid (direct-mapped LRP array + a small LRU/LRP side array).
+  *
+  * Tags run ahead of data: the tag arrays are looked up and updated in request order exactly as the trace model
+  * does (one request every two cycles: read the set, decide and write), so hit and miss counts equal the model's
+  * on the same order. Each lookup leaves a ticket (hit, fill, data line) in an in-order queue; misses send their
+  * DRAM read at once. The data stage serves tickets strictly in order: a miss passes its DRAM beats to the output
+  * and, if it allocated, writes them into the data RAM; a hit reads its line from the data RAM. Because data is
+  * written and read only in ticket order, a hit always sees the line of the latest earlier fill, even when that
+  * fill's DRAM data arrived after the hit was looked up (no stale or wrong data, whatever the latency).
+  */
+class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extends FetchPathModule(g0) {
+  private val c = cg.c
+  private val dataBits = g.axi.dataBits
+  private val isBf = c.policy == "bf"
+  private val isHybrid = c.policy == "hybrid"
+  private val lineBits = log2Ceil(cg.dataLines)
+
+  class Ticket extends Bundle {
+    val hit = Bool()
+    val fill = Bool()     // write the DRAM beats into the data RAM
+    val silent = Bool()   // preload: fill only, nothing to output
+    val line = UInt(math.max(1, lineBits).W)
+    val beats = UInt(g.beatsBits.W)
+  }
+  val ticketQ = Module(new Queue(new Ticket, tickets))
+  val missQ = Module(new Queue(g.memReq, 4))
+  io.memReq <> missQ.io.deq
+
+  val hits = RegInit(0.U(48.W)); val misses = RegInit(0.U(48.W)); val bypasses = RegInit(0.U(48.W))
+  io.stats.hits := hits; io.stats.misses := misses; io.stats.bypasses := bypasses
+
+  // ---------------------------------------------------------------- lookup: stage 0 reads, stage 1 decides
+  val s1 = Reg(g.pathReq)
+  val s1Valid = RegInit(false.B)
+  val ready = WireDefault(true.B) // false while the arrays are cleared or the static buffer is preloaded
+  io.in.ready := !s1Valid && ready
+  when(io.in.fire) { s1 := io.in.bits; s1Valid := true.B }
+  val lookLine = Mux(s1Valid, s1.line, io.in.bits.line)
+
+  val hit = Wire(Bool()); val fill = Wire(Bool()); val dataLine = Wire(UInt(math.max(1, lineBits).W))
+  val s1Fire = s1Valid && ticketQ.io.enq.ready && (hit || missQ.io.enq.ready)
+  when(s1Fire) { s1Valid := false.B }
+
+  if (isBf) {
+    // static buffer: lines 0..lines-1 hold nodes 0..lines-1 (the highest, breadth-first ids)
+    hit := s1.line < cg.lines.U
+    fill := false.B
+    dataLine := s1.line(math.max(1, lineBits) - 1, 0)
+  } else {
+    val mainPol = Policies.byName(if (isHybrid) "dm" else c.policy, c.ways)
+    val main = new TagArray(cg.lines / c.ways, mainPol, lrp = c.policy == "lrp" || isHybrid)
+    val arrays = Seq(main) ++ (if (isHybrid) Seq(new TagArray(cg.sideLines / cg.sideWays, Policies.byName("lru", cg.sideWays), lrp = true)) else Nil)
+    val entries = arrays.map(_.read(lookLine))
+    val ds = arrays.zip(entries).map { case (a, e) => a.decide(e, s1.line, s1.level, io.maxLevel) }
+    // data line of (set, way): set * ways + way, after `base` lines of the arrays before this one
+    def index(a: TagArray, base: Int, way: UInt): UInt = {
+      val wayBits = log2Ceil(a.ways)
+      val local = if (wayBits == 0) a.setOf(s1.line) else if (a.setBits == 0) way(wayBits - 1, 0) else Cat(a.setOf(s1.line), way(wayBits - 1, 0))
+      (base.U +& local)(math.max(1, lineBits) - 1, 0)
+    }
+    val mainIdx = index(main, 0, ds.head.way)
+    if (!isHybrid) {
+      hit := ds.head.hit; fill := ds.head.fill; dataLine := mainIdx
+      main.commit(s1.line, ds.head, s1Fire)
+    } else {
+      // a line is in at most one array; the DM line is replaced when the level policy allows, else the side
+      // array is offered the line (its own empty/LRU victim + level rule); refused there too = bypass
+      val (dm, side) = (ds(0), ds(1))
+      val sideIdx = index(arrays(1), cg.lines, side.way)
+      hit := dm.hit || side.hit
+      fill := !hit && (dm.fill || side.fill)
+      dataLine := Mux(dm.hit || (!side.hit && dm.fill), mainIdx, sideIdx)
+      main.commit(s1.line, dm, s1Fire && !side.hit)
+      arrays(1).commit(s1.line, side, s1Fire && (side.hit || (!dm.hit && !dm.fill)))
+    }
+    // after reset every set is cleared once (a SyncReadMem has no reset)
+    val maxSets = arrays.map(_.sets).max
+    val clearIdx = RegInit(0.U(log2Ceil(maxSets + 1).W))
+    val clearing = clearIdx =/= maxSets.U
+    when(clearing) {
+      clearIdx := clearIdx + 1.U
+      for (a <- arrays) when(clearIdx < a.sets.U) { a.clear(clearIdx(math.max(1, a.setBits) - 1, 0)) }
+    }
+    ready := !clearing
+  }
+
+  ticketQ.io.enq.valid := s1Fire
+  ticketQ.io.enq.bits.hit := hit
+  ticketQ.io.enq.bits.fill := fill
+  ticketQ.io.enq.bits.silent := false.B
+  ticketQ.io.enq.bits.line := dataLine
+  ticketQ.io.enq.bits.beats := s1.beats
+  missQ.io.enq.valid := s1Fire && !hit
+  missQ.io.enq.bits.addr := s1.addr
+  missQ.io.enq.bits.beats := s1.beats
+  when(s1Fire) {
+    when(hit) { hits := hits + 1.U }.otherwise { misses := misses + 1.U }
+    when(!hit && !fill) { bypasses := bypasses + 1.U }
+  }
+  if (isBf) preload() // after the defaults above: its ticket and DRAM read override them while it runs
+
+  /** bf: before the first request is served, read nodes 0 .. min(lines, primBase / stride) - 1 into the buffer
+    * (primBase bounds the node region; it is set by the host before any ray arrives).
+    */
+  private def preload(): Unit = {
+    val started = RegInit(false.B); val done = RegInit(false.B)
+    val k = RegInit(0.U(log2Ceil(cg.lines + 1).W))
+    val nodesInImage = io.primBase >> log2Ceil(cg.strideBytes)
+    val n = Mux(nodesInImage < cg.lines.U, nodesInImage, cg.lines.U)
+    when(io.in.valid) { started := true.B }
+    val issuing = started && !done
+    val issue = issuing && k < n && ticketQ.io.enq.ready && missQ.io.enq.ready
+    when(issuing && k >= n) { done := true.B }
+    when(issue) { k := k + 1.U }
+    ready := done
+    when(issue) {
+      ticketQ.io.enq.valid := true.B
+      ticketQ.io.enq.bits.hit := false.B
+      ticketQ.io.enq.bits.fill := true.B
+      ticketQ.io.enq.bits.silent := true.B
+      ticketQ.io.enq.bits.line := k
+      ticketQ.io.enq.bits.beats := cg.lineBeats.U
+      missQ.io.enq.valid := true.B
+      missQ.io.enq.bits.addr := k << log2Ceil(cg.strideBytes)
+      missQ.io.enq.bits.beats := cg.lineBeats.U
+    }
+  }
+
+  // ---------------------------------------------------------------- data: tickets strictly in order
+  val data = SyncReadMem(cg.dataLines << cg.beatBits, UInt(dataBits.W))
+  val outQ = Module(new Queue(new FetchBeat(dataBits), 4))
+  io.out <> outQ.io.deq
+  val head = ticketQ.io.deq.bits
+  val beat = RegInit(0.U(g.beatsBits.W))
+  val lastBeat = beat === head.beats - 1.U
+  def addr(line: UInt, b: UInt): UInt = if (cg.beatBits == 0) line else Cat(line, b(cg.beatBits - 1, 0))
+
+  // a data RAM read issued last cycle lands in outQ this cycle; reads are issued only when outQ will have room
+  val inflight = RegInit(false.B); val inflightLast = Reg(Bool())
+  val readIssue = ticketQ.io.deq.valid && head.hit && (outQ.io.count +& inflight.asUInt) <= 2.U
+  val rd = data.read(addr(head.line, beat), readIssue)
+  inflight := readIssue; when(readIssue) { inflightLast := lastBeat }
+
+  val missHead = ticketQ.io.deq.valid && !head.hit
+  val canTakeMiss = missHead && !inflight && (head.silent || outQ.io.enq.ready)
+  io.memResp.ready := canTakeMiss
+  val missBeat = io.memResp.fire
+  when(missBeat && head.fill) { data.write(addr(head.line, beat), io.memResp.bits.data) }
+
+  outQ.io.enq.valid := inflight || (missBeat && !head.silent)
+  outQ.io.enq.bits.data := Mux(inflight, rd, io.memResp.bits.data)
+  outQ.io.enq.bits.last := Mux(inflight, inflightLast, lastBeat)
+
+  val beatDone = readIssue || missBeat
+  when(beatDone) { beat := Mux(lastBeat, 0.U, beat + 1.U) }
+  ticketQ.io.deq.ready := beatDone && lastBeat
+
+  when(missBeat) { assert(io.memResp.bits.last === lastBeat, "CachePath: DRAM beats out of step with the ticket") }
+  when(inflight) { assert(outQ.io.enq.ready, "CachePath: a data RAM read found the output queue full") }
+}
+
+object CachePath {
+  /** Refuses cache configurations the RTL cannot build, with what to change (InputError: one `error:` line). */
+  def validate(p: rtaccel.config.PlatformParams): Unit = {
+    def fail(msg: String) = throw new rtaccel.io.InputError(msg)
+    for ((what, c) <- Seq("NODE" -> p.nodeCache, "PRIM" -> p.primCache) if c.entries > 0) {
+      val pol = try Policies.byName(c.policy, c.ways) catch { case e: IllegalArgumentException => fail(s"${what}_POLICY: ${e.getMessage.stripPrefix("requirement failed: ")}") }
+      if (pol.stateBits > PolicyTables.MaxStateBits)
+        fail(s"${what}_WAYS=${c.ways} with ${c.policy}: the RTL tabulates at most ${PolicyTables.MaxStateBits} state bits per set (true LRU up to 4 ways, PLRU up to 8); use fewer ways or make cachesim")
+    }
+    if (p.primCache.entries > 0 && !Set("dm", "lru", "plru")(p.primCache.policy))
+      fail(s"PRIM_POLICY=${p.primCache.policy} is not built in RTL (leaf references carry no level, and the static buffer preloads nodes); use dm|lru|plru, or make cachesim for the model")
+    if (p.primCache.entries > 0 && p.primCache.entries < p.mppl)
+      fail(s"PRIM_CACHE=${p.primCache.entries} holds less than one leaf of MPPL=${p.mppl} primitives; use at least ${p.mppl}")
+  }
+
+  /** MC path factory: a cache on the node and/or primitive path when its CacheParams has entries, else the
+    * pass-through. The primitive cache's lines hold one leaf of up to MPPL primitives (the paper's W x D).
+    */
+  def factory(node: CacheParams, prim: CacheParams, mppl: Int): (McGeometry, Int) => FetchPathModule = (g, i) =>
+    if (i == FetchPath.Node && node.entries > 0) new CachePath(g, CacheGeometry(node, 1, g.nodeBeats, g.p.nodeStrideBytes))
+    else if (i == FetchPath.Prim && prim.entries > 0) new CachePath(g, CacheGeometry(prim, mppl, mppl * g.primBeats, g.p.primStrideBytes))
+    else new FetchPath(g)
+}

@@ -1,0 +1,43 @@
+package rtaccel.cache.hw
+
+import chisel3._
+import chisel3.util._
+import rtaccel.cache.policy.{LevelPolicy, ReplacementPolicy}
+
+/** The pure policy functions of rtaccel.cache.policy, tabulated at elaboration time so the RTL and the trace
+  * model cannot disagree on a rule: the circuit only indexes tables the Scala functions filled in.
+  */
+object PolicyTables {
+  /** Largest state a table may be indexed by (rows = 2^stateBits). */
+  val MaxStateBits = 10
+
+  def check(pol: ReplacementPolicy): Unit =
+    require(pol.stateBits <= MaxStateBits,
+      s"the RTL tabulates replacement state of up to $MaxStateBits bits; ${pol.ways}-way ${pol.getClass.getSimpleName} " +
+        s"needs ${pol.stateBits}: use fewer ways (true LRU up to 4, tree PLRU up to 8)")
+
+  /** Rows for states the policy can reach; other rows are never indexed and hold 0. */
+  private def rows[T](pol: ReplacementPolicy)(f: Int => Int): Seq[Int] = {
+    val reach = pol.states.toSet
+    (0 until (1 << pol.stateBits)).map(s => if (reach(s)) f(s) else 0)
+  }
+
+  /** next state after touching `way` in `state` */
+  def touch(pol: ReplacementPolicy, state: UInt, way: UInt): UInt =
+    if (pol.stateBits == 0) 0.U(1.W)
+    else {
+      val t = VecInit(Seq.tabulate(pol.ways)(w => VecInit(rows(pol)(s => pol.touch(s, w)).map(_.U(pol.stateBits.W)))))
+      t(way)(state(pol.stateBits - 1, 0))
+    }
+
+  /** the way the policy evicts from a full set */
+  def victim(pol: ReplacementPolicy, state: UInt): UInt =
+    if (pol.stateBits == 0 || pol.ways == 1) 0.U
+    else VecInit(rows(pol)(pol.victim).map(_.U(log2Ceil(pol.ways).W)))(state(pol.stateBits - 1, 0))
+
+  /** LevelPolicy.allocate(victimLevel, incomingLevel, maxLevel) for 4-bit levels and a runtime MAX_LEVEL. */
+  def allocate(victimLevel: UInt, incomingLevel: UInt, maxLevel: UInt): Bool = {
+    val t = VecInit(Seq.tabulate(16)(ml => VecInit(Seq.tabulate(16)(l => LevelPolicy.cls(l, ml).U(5.W)))))
+    t(maxLevel)(incomingLevel) <= t(maxLevel)(victimLevel)
+  }
+}

@@ -1,0 +1,80 @@
+package rtaccel.cache.hw
+
+import chisel3._
+import chisel3.util._
+import rtaccel.cache.policy.ReplacementPolicy
+
+/** One way of a set: valid, tag and the 4-bit level code of the line it holds. */
+class WayEntry(tagBits: Int) extends Bundle {
+  val valid = Bool()
+  val tag = UInt(tagBits.W)
+  val level = UInt(4.W)
+}
+
+/** A set: its ways and the replacement state (one RAM word, read and written whole). */
+class SetEntry(ways: Int, tagBits: Int, stateBits: Int) extends Bundle {
+  val way = Vec(ways, new WayEntry(tagBits))
+  val state = UInt(math.max(1, stateBits).W)
+}
+
+/** What one access does to a set (combinational, from the set as read): hit, fill (a miss that allocates; a
+  * miss without fill is a bypass), the way hit or filled, and the set to write back.
+  */
+final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: SetEntry)
+
+/** The tag side of a set-associative array (`sets` x `ways`), a single-port synchronous RAM.
+  * Lookup and fill follow the model's rules (docs/caches.md): a hit touches the way; a miss fills the lowest
+  * empty way, else the policy's victim, which under the level policy (`lrp`) only if
+  * LevelPolicy.allocate(victim level, incoming level, MAX_LEVEL); a refused fill changes nothing.
+  * Protocol: `read(line)` in one cycle, the `Decision` on the next (the data stays valid while the same set
+  * is read again each cycle), `write` when the decision is taken.
+  */
+class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean) {
+  PolicyTables.check(pol)
+  val ways: Int = pol.ways
+  val setBits: Int = log2Ceil(sets)
+  val tagBits: Int = 32 - setBits
+  private def entryType = new SetEntry(ways, tagBits, pol.stateBits)
+  private val mem = SyncReadMem(sets, entryType)
+
+  def setOf(line: UInt): UInt = if (setBits == 0) 0.U(1.W) else line(setBits - 1, 0)
+  def tagOf(line: UInt): UInt = line(31, setBits)
+
+  /** Starts a read of `line`'s set; the result is `entry` one cycle later. */
+  def read(line: UInt): SetEntry = mem.read(setOf(line), true.B)
+
+  /** The empty set of reset, written by the init sweep. */
+  def emptyEntry: SetEntry = {
+    val e = Wire(entryType)
+    e.way.foreach { w => w.valid := false.B; w.tag := 0.U; w.level := 0.U }
+    e.state := pol.init.U
+    e
+  }
+  def clear(set: UInt): Unit = mem.write(set, emptyEntry)
+
+  def decide(e: SetEntry, line: UInt, level: UInt, maxLevel: UInt): Decision = {
+    val tag = tagOf(line)
+    val hitVec = e.way.map(w => w.valid && w.tag === tag)
+    val hit = hitVec.reduce(_ || _)
+    val hitWay = OHToUInt(hitVec)
+    val emptyVec = e.way.map(!_.valid)
+    val hasEmpty = emptyVec.reduce(_ || _)
+    val allocWay = Mux(hasEmpty, PriorityEncoder(emptyVec), PolicyTables.victim(pol, e.state))
+    val victimLevel = if (ways == 1) e.way(0).level else VecInit(e.way.map(_.level))(allocWay)
+    val levelOk = if (lrp) PolicyTables.allocate(victimLevel, level, maxLevel) else true.B
+    val fill = !hit && (hasEmpty || levelOk)
+    val way = Mux(hit, hitWay, allocWay)
+    val next = WireDefault(e)
+    for (w <- 0 until ways) when(fill && (if (ways == 1) true.B else allocWay === w.U)) {
+      next.way(w).valid := true.B
+      next.way(w).tag := tag
+      next.way(w).level := level
+    }
+    next.state := PolicyTables.touch(pol, e.state, way)
+    new Decision(hit, fill, if (ways == 1) 0.U else way, next)
+  }
+
+  /** Commits a decision (a hit or a fill; nothing to write for a refused fill). */
+  def commit(line: UInt, d: Decision, en: Bool): Unit =
+    when(en && (d.hit || d.fill)) { mem.write(setOf(line), d.next) }
+}

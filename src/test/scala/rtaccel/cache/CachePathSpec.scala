@@ -1,0 +1,108 @@
+package rtaccel.cache
+
+import scala.util.Random
+import chisel3._
+import chiseltest._
+import org.scalatest.flatspec.AnyFlatSpec
+import rtaccel.bvh.{MemoryImage, RefCodec}
+import rtaccel.cache.hw.{CachePath, PolicyTables}
+import rtaccel.cache.policy.{LevelPolicy, Policies, ReplacementPolicy}
+import rtaccel.config.{CacheParams, RefFormat}
+import rtaccel.mc.{McCases, McHarness}
+import rtaccel.sim.DramConfig
+
+/** The policy tables the RTL indexes, exhaustively against the Scala functions they were built from. */
+class PolicyTableHarness(pol: ReplacementPolicy) extends Module {
+  val io = IO(new Bundle {
+    val state = Input(UInt(math.max(1, pol.stateBits).W))
+    val way = Input(UInt(math.max(1, chisel3.util.log2Ceil(pol.ways)).W))
+    val next = Output(UInt(math.max(1, pol.stateBits).W))
+    val victim = Output(UInt(8.W))
+    val vLevel = Input(UInt(4.W)); val iLevel = Input(UInt(4.W)); val maxLevel = Input(UInt(4.W))
+    val allocate = Output(Bool())
+  })
+  io.next := PolicyTables.touch(pol, io.state, io.way)
+  io.victim := PolicyTables.victim(pol, io.state)
+  io.allocate := PolicyTables.allocate(io.vLevel, io.iLevel, io.maxLevel)
+}
+
+class PolicyTablesSpec extends AnyFlatSpec with ChiselScalatestTester {
+  behavior of "PolicyTables"
+  for ((name, ways) <- Seq("lru" -> 2, "lru" -> 4, "plru" -> 4, "plru" -> 8)) it should s"equal $name $ways-way touch/victim in every reachable state" in {
+    val pol = Policies.byName(name, ways)
+    test(new PolicyTableHarness(pol)) { dut =>
+      for (s <- pol.states) {
+        dut.io.state.poke(s.U)
+        assert(dut.io.victim.peek().litValue == pol.victim(s), s"victim of state $s")
+        for (w <- 0 until ways) {
+          dut.io.way.poke(w.U)
+          assert(dut.io.next.peek().litValue == pol.touch(s, w), s"touch($s, $w)")
+        }
+      }
+    }
+  }
+  it should "equal LevelPolicy.allocate for all 16 x 16 x 16 levels and MAX_LEVELs" in {
+    test(new PolicyTableHarness(Policies.byName("dm", 1))) { dut =>
+      for (ml <- 0 to 15; v <- 0 to 15; i <- 0 to 15) {
+        dut.io.maxLevel.poke(ml.U); dut.io.vLevel.poke(v.U); dut.io.iLevel.poke(i.U)
+        assert(dut.io.allocate.peek().litToBoolean == LevelPolicy.allocate(v, i, ml), s"allocate($v, $i, $ml)")
+      }
+    }
+  }
+  it should "refuse state it cannot tabulate, saying what to change" in {
+    val e = intercept[IllegalArgumentException](PolicyTables.check(Policies.byName("lru", 8)))
+    assert(e.getMessage.contains("fewer ways"))
+  }
+}
+
+/** Caches in the MC under random traffic, DRAM jitter and host backpressure: every beat equals the image
+  * (McCases checks each one in order, so a stale or wrong line fails at once), and the RTL's hit, miss and
+  * bypass counts equal the trace model's on the same request order.
+  */
+class CachePathSpec extends McCases {
+  private val withLevels = Some(RefFormat(nodeIdBits = 20, primIndexBits = 20, countBits = 2, levelBits = 4))
+  /** Half the requests from the first eighth of the refs (near the root: reuse), half uniform (conflicts). */
+  private val skewed: (Random, IndexedSeq[Int]) => Int = (r, pool) =>
+    if (r.nextBoolean()) pool(r.nextInt(math.max(1, pool.length / 8))) else pool(r.nextInt(pool.length))
+
+  private def modelCounts(img: MemoryImage, node: CacheParams, prim: CacheParams, refs: Seq[Int]): CacheSink = {
+    val p = img.p.copy(nodeCache = node, primCache = prim)
+    val (nc, pc) = rtaccel.cli.CacheSim.models(p, node, prim)
+    val sink = new CacheSink(nc, pc, p.nodeAccessBytes, p.primAccessBytes)
+    Replay.refs(refs.toArray, new RefCodec(p.refs), sink)
+    sink
+  }
+
+  def cacheCase(what: String, node: CacheParams, prim: CacheParams, seed: Long, expectBypass: Boolean = false,
+                jitter: Int = 15, readyProb: Double = 0.6): Unit =
+    runCase(s"serve image bytes and count like the model: $what", dataBits = 256, tris = 400, nReqs = 260,
+      DramConfig(12, 4, 1, randomExtraLatency = jitter, seed = seed.toInt), reqProb = 0.8, readyProb = readyProb, seed = seed,
+      refFormat = withLevels, pathFactory = CachePath.factory(node, prim, 4), respBufferBeats = 16, maxCycles = 200000,
+      maxLevel = node.maxLevel, pick = skewed, annotations = Seq(VerilatorBackendAnnotation), // policy tables are slow in treadle
+      afterRun = (dut: McHarness, refs: Seq[Int], img: MemoryImage) => {
+        val m = modelCounts(img, node, prim, refs)
+        for ((name, stats, model) <- Seq(("node", dut.io.nodeCache, m.nodeCache), ("prim", dut.io.primCache, m.primCache))) {
+          val (h, mi, b) = (stats.hits.peek().litValue, stats.misses.peek().litValue, stats.bypasses.peek().litValue)
+          model match {
+            case Some(c) =>
+              info(s"$name cache: RTL hits $h misses $mi bypasses $b; model ${c.hits} / ${c.misses} / ${c.bypasses}")
+              assert((h, mi, b) == ((BigInt(c.hits), BigInt(c.misses), BigInt(c.bypasses))), s"$name cache counts differ from the model")
+              assert(h > 0 && mi > 0, s"$name cache: the traffic must both hit and miss to test anything")
+              if (expectBypass && name == "node") assert(b > 0, "the level policy never refused a fill")
+            case None => assert(h == 0 && mi == 0 && b == 0)
+          }
+        }
+      })
+
+  behavior of "CachePath in the MC"
+  val none = CacheParams()
+  cacheCase("direct-mapped node cache, 16 lines", CacheParams(16, 1, "dm"), none, seed = 31)
+  cacheCase("4-way true-LRU node cache + 2-way LRU primitive cache", CacheParams(32, 4, "lru"), CacheParams(32, 2, "lru"), seed = 32)
+  cacheCase("4-way tree-PLRU node cache + direct-mapped primitive cache", CacheParams(32, 4, "plru"), CacheParams(16, 1, "dm"), seed = 33)
+  cacheCase("level policy, direct-mapped, MAX_LEVEL 2", CacheParams(16, 1, "lrp", maxLevel = 2), none, seed = 34, expectBypass = true)
+  cacheCase("level policy, 2-way LRU, MAX_LEVEL 1", CacheParams(16, 2, "lrp", maxLevel = 1), none, seed = 35, expectBypass = true)
+  cacheCase("breadth-first static buffer of 16 nodes (preloaded)", CacheParams(16, 1, "bf"), none, seed = 36, expectBypass = true)
+  cacheCase("hybrid: DM + LRP side cache, MAX_LEVEL 3", CacheParams(32, 1, "hybrid", maxLevel = 3), CacheParams(8, 1, "dm"), seed = 37)
+  cacheCase("DM node + primitive cache, no DRAM jitter, host always ready", CacheParams(16, 1, "dm"), CacheParams(16, 1, "dm"),
+    seed = 38, jitter = 0, readyProb = 1.0)
+}
