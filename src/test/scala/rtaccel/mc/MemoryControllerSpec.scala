@@ -18,9 +18,11 @@ class StallingPath(g: McGeometry, seed: Int) extends FetchPathModule(g) {
   val inQ = Queue(io.in, 4)
   val gate = chisel3.util.random.LFSR(8, true.B, Some(BigInt(seed)))(2, 0) === 0.U // ~1 cycle in 8
   io.memReq.valid := inQ.valid && gate
-  io.memReq.bits := inQ.bits
+  io.memReq.bits.addr := inQ.bits.addr
+  io.memReq.bits.beats := inQ.bits.beats
   inQ.ready := io.memReq.ready && gate
   io.out <> io.memResp
+  io.stats := 0.U.asTypeOf(io.stats)
 }
 
 /** MC + DRAM model, with AR/R traffic counters for the test. */

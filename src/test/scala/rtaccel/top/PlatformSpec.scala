@@ -3,7 +3,7 @@ package rtaccel.top
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
 import rtaccel.cli.{Cli, Simulate}
-import rtaccel.config.Presets
+import rtaccel.config.{CacheParams, Presets}
 import rtaccel.scene.{Rays, Scene}
 
 /** Whole-platform RTL (Verilator) against the reference model, ray by ray, bit for bit.
@@ -31,8 +31,11 @@ class PlatformSpec extends AnyFunSuite {
     Rays(r ++ extra.flatten)
   }
 
-  private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0) = {
-    val p = Presets.paper2017.copy(name = "paper2017", tus = tus, m = m, mppl = mppl, stackDepth = 64)
+  private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
+                     node: CacheParams = CacheParams(), prim: CacheParams = CacheParams()) = {
+    // level-aware node caches read the level field of the paper's Section 7.2 layout
+    val base = if (Set("lrp", "hybrid")(node.policy) && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
+    val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = 64, nodeCache = node, primCache = prim)
     val b = Cli.build(scene, p, fit = false)
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall))
     val j = o.json
@@ -43,12 +46,33 @@ class PlatformSpec extends AnyFunSuite {
     assert(j("stack_overflow_rays").num == j("model_stack_overflow_rays").num)
     assert(j("node_requests").num == j("model_node_fetches").num, "the RTL fetched a different number of nodes")
     assert(j("prim_requests").num == j("model_prim_tests").num, "the RTL fetched a different number of primitives")
+    if (node.entries > 0 || prim.entries > 0) {
+      assert(j("cache_counts_match_model").bool, s"cache counts differ from the trace model on the RTL's order: ${ujson.write(j)}")
+      for ((c, k) <- Seq(node -> "node_cache", prim -> "prim_cache") if c.entries > 0) {
+        info(f"$k ${c.entries} x${c.ways} ${c.policy}: hits ${j(k)("hits").num}%.0f misses ${j(k)("misses").num}%.0f bypasses ${j(k)("bypasses").num}%.0f")
+        assert(j(k)("hits").num > 0 && j(k)("misses").num > 0, s"$k: a test cache must both hit and miss")
+      }
+    } else assert(j("node_cache")("hits").num == 0 && j("prim_cache")("misses").num == 0)
     j
   }
 
   for ((tus, m, mppls) <- grid; mppl <- mppls)
     test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl") {
       runOne(tus, m, mppl, rays, scene)
+    }
+
+  // Caches (docs/caches.md): whole scene bit-exact, counts equal the model on the logged order, and no stale
+  // line under random DRAM latency and host backpressure (a wrong beat would change a hit).
+  private val cacheCases = Seq(
+    ("direct-mapped node + primitive caches", 4, CacheParams(64, 1, "dm"), CacheParams(64, 1, "dm"), 0, 0),
+    ("LRP 2-way node cache (MAX_LEVEL 3) + 2-way LRU primitive cache, jitter + backpressure", 8,
+      CacheParams(64, 2, "lrp", maxLevel = 3), CacheParams(32, 2, "lru"), 37, 40),
+    ("hybrid node cache (MAX_LEVEL 2) + PLRU 4-way primitive cache, jitter + backpressure", 4,
+      CacheParams(64, 1, "hybrid", maxLevel = 2), CacheParams(64, 4, "plru"), 23, 30),
+    ("breadth-first static node buffer (preloaded)", 2, CacheParams(16, 1, "bf"), CacheParams(), 11, 0))
+  for ((what, tus, node, prim, jitter, stall) <- cacheCases)
+    test(s"caches, bit-exact and counting like the model: $what") {
+      runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim)
     }
 
   test("random memory latency and host backpressure change no result") {
