@@ -134,7 +134,7 @@ class Scene:
     def prov(self, j, rest, version=None):
         """The first line of every CSV: what made it (scene, rays, config, version) and how."""
         return (f"# scene={self.a.scene} rays={j['rays']}{golden_desc(self.a.rays)} config={j['config']} M={j['m']} "
-                f"nodes={j['nodes']} {rest} rtaccel={version or j['rtaccel']}\n")
+                f"{rest} rtaccel={version or j['rtaccel']}\n")
 
     def fig11(self):
         out = self.a.out
@@ -146,17 +146,17 @@ class Scene:
                 body = f.read()
         finally:
             os.unlink(tmp)
-        text = self.prov(j, f"MPPL={j['mppl']} tus={j['tus']} figure=11 cache=node miss_rate") + body
+        text = self.prov(j, f"MPPL={j['mppl']} nodes={j['nodes']} tus={j['tus']} figure=11 cache=node miss_rate") + body
         plot_caches.read_fig11("CacheSim sweep", text)  # refuse a malformed sweep before it becomes an output
         write_text(os.path.join(out, "fig11_miss_rate.csv"), text)
         plot_caches.main(["fig11", os.path.join(out, "fig11_miss_rate.png"), os.path.join(out, "fig11_miss_rate.csv")])
 
     def fig8_9(self):
-        rows, first = [], None
+        rows, node_runs = [], []
         for mppl in self.a.mppl_list:
             node = self.cachesim(mppl, NODE_ONLY, f"Fig 8, MPPL={mppl}, node 8192 DM")
             both = self.cachesim(mppl, NODE_PRIM, f"Fig 9, MPPL={mppl}, node 4096 DM + prim 4096 DM")
-            first = first or node
+            node_runs.append(node)
             # No cache = the same traversal's accesses, all from DRAM: CacheSim reports them as *_nocache.
             nb, pb = node["node_bytes_per_ray_nocache"], node["prim_bytes_per_ray_nocache"]
             rows.append(f"{mppl},nocache,{nb:.3f},{pb:.3f},{nb + pb:.3f},,")
@@ -166,7 +166,9 @@ class Scene:
                             f"{j['dram_bytes_per_ray']:.3f},{j['node_cache']['miss_rate']:.5f},{pm}")
         # Normally one version; more only if the classpath was rebuilt mid-run, and then the CSV says so.
         versions = ",".join(sorted({j["rtaccel"] for j in self.runs}))
-        text = (self.prov(first, "tus=1 figures=4,8,9 node=8192x1-dm node_prim=4096x1-dm+4096x1-dm", versions)
+        nodes = ",".join(f"{j['mppl']}:{j['nodes']}" for j in node_runs)  # the tree changes with MPPL
+        text = (self.prov(node_runs[0], f"nodes_by_mppl={nodes} tus=1 figures=4,8,9 node=8192x1-dm node_prim=4096x1-dm+4096x1-dm",
+                          versions)
                 + "# variants: nocache = *_nocache of the node run; node = --node-cache 8192 DM; node_prim = "
                   "--node-cache 4096 DM --prim-cache 4096 DM (primitives; lines = 4096/MPPL); miss rate empty = no cache\n"
                 + ",".join(plot_caches.BYTES_COLUMNS) + "\n" + "\n".join(rows) + "\n")

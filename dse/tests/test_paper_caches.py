@@ -78,6 +78,7 @@ def test_cache_figures_from_cachesim(inputs):
     # Figs 8-9: 3 variants x 3 MPPL, numbers as CacheSim reported them; no cache = the *_nocache fields.
     text = (out / "fig8_9_bytes_per_ray.csv").read_text()
     assert text.startswith("# scene=/scenes/room.obj ") and "rtaccel=fake-1" in text.splitlines()[0]
+    assert " nodes_by_mppl=1:500,4:500,16:500 " in text.splitlines()[0]
     rows = list(csv.DictReader(l for l in text.splitlines() if not l.startswith("#")))
     assert [(r["mppl"], r["variant"]) for r in rows] == [
         (k, v) for k in ("1", "4", "16") for v in ("nocache", "node", "node_prim")]
