@@ -73,7 +73,7 @@ def check_npy(path, what):
 def run_java(java, main, args, what):
     """stdout of `rtaccel.cli.<main> args`. Java's `[..]` progress lines are passed on to our stderr."""
     cmd = f"{java} rtaccel.cli.{main} " + " ".join(shlex.quote(str(a)) for a in args)
-    tail = []
+    tail, crash = [], None
     # stdout to a file, not a pipe, so a chatty JVM cannot block while we read its stderr.
     with tempfile.TemporaryFile("w+") as so:
         p = subprocess.Popen(["bash", "-c", cmd], stdout=so, stderr=subprocess.PIPE, text=True)
@@ -81,6 +81,8 @@ def run_java(java, main, args, what):
             if line.startswith("["):
                 sys.stderr.write("    " + line)
             tail = (tail + [line.rstrip()])[-40:]
+            if crash is None and ("Exception" in line or "Error" in line):
+                crash = line.strip()  # the first one names the cause; a long trace would push it out of `tail`
         rc = p.wait()
         so.seek(0)
         out = so.read()
@@ -89,8 +91,8 @@ def run_java(java, main, args, what):
     errs = [t for t in tail if t.startswith("error:")]
     if rc == 2 and errs:  # the entry point refused its input: the same kind of failure as ours
         raise UserError(f"{what}: {errs[-1][len('error:'):].strip()}")
-    crash = [t for t in tail if "Exception" in t or "Error" in t] or tail or ["no output"]
-    raise JavaFailed(f"{what}: rtaccel.cli.{main} exited with status {rc}: {crash[0].strip()}")
+    cause = crash or (tail[-1].strip() if tail else "no output")
+    raise JavaFailed(f"{what}: rtaccel.cli.{main} exited with status {rc}: {cause}")
 
 
 def last_json(out, what):
