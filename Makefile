@@ -28,10 +28,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        verilog lint simulate regress paper-nocache
+        verilog lint simulate regress paper-nocache paper-caches
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | paper-nocache | paper-caches   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -143,6 +143,32 @@ paper-nocache: deps
 	  T=$$(tools/tris $$s); $(JAVA) rtaccel.cli.SweepTus --tris "$$T" --scene-label $$s --rays $$d/golden/rays.npy --out $$d \
 	    --config paper2017 --m $(M) --mppl $(MPPL) --tus-list $(NOCACHE_TUS) || exit $$?; csvs="$$csvs $$d/tus_sweep.csv"; done; \
 	  [ -z "$$csvs" ] || $(PY) -m dse.plot_tus build/paper-nocache/tus_sweep.png $$csvs
+
+# Paper Figs 11 (node-cache miss rate vs size) and 8-9 (DRAM bytes per ray vs MPPL) from the cache model, and
+# Figs 12-13 with the 2^13-entry DM node cache from the RTL (slow; skip with PAPER_TUS=). CSV + PNG per scene in
+# build/paper-caches/<scene>/, combined PNGs in build/paper-caches/ (dse/paper_caches.py, docs/caches.md).
+# SCENE=<mesh> on the command line runs just that scene. The golden rays are kept per resolution, depth and seed
+# in <scene>/golden/ and remade only when absent or older than the mesh.
+PAPER_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
+PAPER_WIDTH  ?= 128
+PAPER_HEIGHT ?= 96
+PAPER_TUS    ?= 1,2,4,8,16,32
+PAPER_RUN_SCENES = $(if $(filter command line,$(origin SCENE)),$(SCENE),$(PAPER_SCENES))
+paper-caches: deps
+	@mkdir -p build/paper-caches; f11=""; f89=""; tus=""; one="$(filter command line,$(origin SCENE))"; \
+	for s in $(PAPER_RUN_SCENES); do \
+	  [ -f "$$s" ] || [ -z "$$one" ] || { echo "error: scene '$$s' not found; give SCENE=<path to .obj or .ply>" >&2; exit 2; }; \
+	  [ -f "$$s" ] || { echo "[paper-caches] skip $$s (absent)"; continue; }; \
+	  n=$$(basename $$s .obj); n=$$(basename $$n .ply); d=build/paper-caches/$$n; G=$$d/golden/$(PAPER_WIDTH)x$(PAPER_HEIGHT)-d$(DEPTH)-s$(SEED); \
+	  [ "$$G/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=$(PAPER_WIDTH) HEIGHT=$(PAPER_HEIGHT) >/dev/null || exit $$?; \
+	  T=$$(tools/tris $$s) || exit $$?; \
+	  $(PY) -m dse.paper_caches --scene $$s --tris "$$T" --rays $$G/rays.npy --out $$d --java '$(JAVA)' --m $(M) --mppl $(MPPL) \
+	    --tus-list "$(PAPER_TUS)" --nocache-csv build/paper-nocache/$$n/tus_sweep.csv || exit $$?; \
+	  f11="$$f11 $$d/fig11_miss_rate.csv"; f89="$$f89 $$d/fig8_9_bytes_per_ray.csv"; \
+	  [ -z "$(PAPER_TUS)" ] || tus="$$tus $$d/tus_sweep.csv $$( [ -f build/paper-nocache/$$n/tus_sweep.csv ] && echo build/paper-nocache/$$n/tus_sweep.csv)"; done; \
+	  [ -z "$$f11" ] || { $(PY) -m dse.plot_caches fig11 build/paper-caches/fig11_miss_rate.png $$f11 && \
+	    $(PY) -m dse.plot_caches bytes build/paper-caches/fig8_9_bytes_per_ray.png $$f89; } || exit $$?; \
+	  [ -z "$$tus" ] || $(PY) -m dse.plot_tus build/paper-caches/fig12_13_tus.png $$tus
 
 # ---------------------------------------------------------------- tests
 FIXTURE_SCENES := cornell hairball soup extreme

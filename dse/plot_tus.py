@@ -1,6 +1,8 @@
 """python -m dse.plot_tus OUT CSV [CSV ...] — paper Figs 12-13: rays/s and memory utilisation vs TUs.
 
-Each CSV is a `tus_sweep.csv` of one scene (rtaccel.cli.SweepTus); its `#` provenance line labels the curve.
+Each CSV is a `tus_sweep.csv` of one scene (rtaccel.cli.SweepTus); its `#` provenance line labels the curve
+with the scene and its node cache (`node_cache=`), so cached (make paper-caches) and uncached (make
+paper-nocache) sweeps of one scene can share a plot: one colour per scene, solid with a cache, dashed without.
 """
 import sys
 from pathlib import Path
@@ -11,34 +13,41 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from scenes.cli import atomic_file  # noqa: E402
+
 
 def read(path):
     lines = Path(path).read_text().splitlines()
     prov = [l[1:].strip() for l in lines if l.startswith("#")]
     rows = [l for l in lines if l and not l.startswith("#")]
     data = np.genfromtxt(rows, delimiter=",", names=True)
-    scene = dict(kv.split("=", 1) for kv in prov[0].split() if "=" in kv).get("scene", path) if prov else path
-    return Path(scene).stem, data, prov
+    kv = dict(kv.split("=", 1) for kv in prov[0].split() if "=" in kv) if prov else {}
+    return Path(kv.get("scene", path)).stem, data, prov, kv.get("node_cache", "none")
 
 
 def main(out, *csvs):
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    footer = []
+    footer, colours = [], {}
     for c in csvs:
-        name, d, prov = read(c)
-        a1.plot(d["tus"], d["rays_per_s"], "o-", label=name)
-        a2.plot(d["tus"], 100 * d["mem_utilisation"], "o-", label=name)
+        name, d, prov, cache = read(c)
+        colour = colours.setdefault(name, f"C{len(colours)}")
+        style = "o--" if cache == "none" else "o-"
+        label = f"{name} ({'no cache' if cache == 'none' else cache + ' node cache'})"
+        a1.plot(d["tus"], d["rays_per_s"], style, color=colour, label=label)
+        a2.plot(d["tus"], 100 * d["mem_utilisation"], style, color=colour, label=label)
         footer += prov
-    for ax, title, yl in ((a1, "rays/s at 150 MHz (no cache)", "rays/s"), (a2, "memory utilisation (of peak)", "%")):
+    for ax, title, yl in ((a1, "rays/s at 150 MHz", "rays/s"), (a2, "memory utilisation (of peak)", "%")):
         ax.set_xscale("log", base=2)
         ax.set_xlabel("traversal units")
         ax.set_ylabel(yl)
         ax.set_title(title)
         ax.grid(True, alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize=7)
     fig.text(0.01, 0.005, "\n".join(footer), fontsize=6, va="bottom")
-    fig.tight_layout(rect=(0, 0.08, 1, 1))
-    fig.savefig(out, dpi=120)
+    fig.tight_layout(rect=(0, 0.02 + 0.02 * len(footer), 1, 1))
+    with atomic_file(out, suffix=".png") as tmp:  # never a half-written PNG
+        fig.savefig(tmp, dpi=120, format="png")
+    plt.close(fig)
     print(f"[plot] {out}")
 
 
