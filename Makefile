@@ -153,6 +153,9 @@ PAPER_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference
 PAPER_WIDTH  ?= 128
 PAPER_HEIGHT ?= 96
 PAPER_TUS    ?= 1,2,4,8,16,32
+# the RTL sweep uses a smaller frame (as paper-nocache, so the two sweeps share their rays)
+PAPER_TUS_WIDTH  ?= 32
+PAPER_TUS_HEIGHT ?= 24
 PAPER_RUN_SCENES = $(if $(filter command line,$(origin SCENE)),$(SCENE),$(PAPER_SCENES))
 paper-caches: deps
 	@mkdir -p build/paper-caches; f11=""; f89=""; tus=""; one="$(filter command line,$(origin SCENE))"; \
@@ -161,8 +164,10 @@ paper-caches: deps
 	  [ -f "$$s" ] || { echo "[paper-caches] skip $$s (absent)"; continue; }; \
 	  n=$$(basename $$s .obj); n=$$(basename $$n .ply); d=build/paper-caches/$$n; G=$$d/golden/$(PAPER_WIDTH)x$(PAPER_HEIGHT)-d$(DEPTH)-s$(SEED); \
 	  [ "$$G/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=$(PAPER_WIDTH) HEIGHT=$(PAPER_HEIGHT) >/dev/null || exit $$?; \
+	  GT=$$d/golden/$(PAPER_TUS_WIDTH)x$(PAPER_TUS_HEIGHT)-d$(DEPTH)-s$(SEED); \
+	  [ -z "$(PAPER_TUS)" ] || [ "$$GT/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$GT WIDTH=$(PAPER_TUS_WIDTH) HEIGHT=$(PAPER_TUS_HEIGHT) >/dev/null || exit $$?; \
 	  T=$$(tools/tris $$s) || exit $$?; \
-	  $(PY) -m dse.paper_caches --scene $$s --tris "$$T" --rays $$G/rays.npy --out $$d --java '$(JAVA)' --m $(M) --mppl $(MPPL) \
+	  $(PY) -m dse.paper_caches --scene $$s --tris "$$T" --rays $$G/rays.npy $$( [ -z "$(PAPER_TUS)" ] || echo --tus-rays $$GT/rays.npy) --out $$d --java '$(JAVA)' --m $(M) --mppl $(MPPL) \
 	    --tus-list "$(PAPER_TUS)" --nocache-csv build/paper-nocache/$$n/tus_sweep.csv || exit $$?; \
 	  f11="$$f11 $$d/fig11_miss_rate.csv"; f89="$$f89 $$d/fig8_9_bytes_per_ray.csv"; \
 	  [ -z "$(PAPER_TUS)" ] || tus="$$tus $$d/tus_sweep.csv $$( [ -f build/paper-nocache/$$n/tus_sweep.csv ] && echo build/paper-nocache/$$n/tus_sweep.csv)"; done; \

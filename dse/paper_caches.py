@@ -188,7 +188,7 @@ class Scene:
         # SweepTus writes OUT/tus_sweep.csv itself (atomically), so it goes to a scratch dir first and is only
         # moved into place once checked.
         with tempfile.TemporaryDirectory(prefix=".tmp-tus-", dir=a.out) as d:
-            run_java(a.java, "SweepTus", ["--tris", a.tris, "--scene-label", a.scene, "--rays", a.rays, "--out", d,
+            run_java(a.java, "SweepTus", ["--tris", a.tris, "--scene-label", a.scene, "--rays", a.tus_rays or a.rays, "--out", d,
                                           "--config", a.tus_config, "--m", a.m, "--mppl", a.mppl,
                                           "--tus-list", ",".join(map(str, a.tus_list))] + TUS_CACHE, "Figs 12-13 sweep")
             csv = os.path.join(d, "tus_sweep.csv")
@@ -209,6 +209,7 @@ def main(argv=None):
     ap.add_argument("--scene", required=True, help="mesh path, used as the label in every output")
     ap.add_argument("--tris", required=True, help="tris.npy of the mesh (tools/tris)")
     ap.add_argument("--rays", required=True, help="rays.npy (make golden)")
+    ap.add_argument("--tus-rays", default="", help="rays.npy of the RTL sweep (default --rays; the RTL is ~1e5x slower than the model)")
     ap.add_argument("--out", required=True, help="output directory (its parent must exist)")
     ap.add_argument("--java", default=os.environ.get("RTACCEL_JAVA", ""), help="JVM command prefix (default $RTACCEL_JAVA)")
     ap.add_argument("--config", default="fit", help="model configuration for the cache model runs (default fit)")
@@ -232,6 +233,8 @@ def main(argv=None):
     a.tus_list = int_list(a.tus_list, "--tus-list (PAPER_TUS)", lambda v: 1 <= v <= 1024, "TU counts must be in 1..1024")
     check_npy(a.tris, "--tris")
     check_npy(a.rays, "--rays")
+    if a.tus_rays:
+        check_npy(a.tus_rays, "--tus-rays")
     parent = os.path.dirname(os.path.abspath(a.out))
     if not os.path.isdir(parent):
         raise UserError(f"parent directory {parent} of --out does not exist")
