@@ -28,7 +28,7 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        verilog lint simulate regress paper-nocache paper-caches
+        verilog lint simulate regress paper-nocache paper-caches bench-caches
 
 help:
 	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | paper-nocache | paper-caches   (see README.md)"
@@ -84,7 +84,7 @@ trace: deps
 CACHE_FLAGS = --node-cache $(or $(NODE_CACHE),0) --node-ways $(or $(NODE_WAYS),1) \
   --max-level $(or $(MAX_LEVEL),15) --prim-cache $(or $(PRIM_CACHE),0) --prim-ways $(or $(PRIM_WAYS),1) \
   $(if $(NODE_POLICY),--node-policy $(NODE_POLICY)) $(if $(PRIM_POLICY),--prim-policy $(PRIM_POLICY))
-CACHE_ARGS = --tus $(or $(TUS),1) $(CACHE_FLAGS) $(if $(SWEEP),--sweep-out $(SWEEP))
+CACHE_ARGS = --tus $(or $(TUS),1) $(CACHE_FLAGS) $(if $(SWEEP),--sweep-out $(SWEEP)) $(EXTRA_CACHESIM)
 cachesim: deps
 	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
 	  T=$(TRIS) && $(JAVA) rtaccel.cli.CacheSim --tris "$$T" --scene-label $(SCENE) --rays $$R $(MODEL_ARGS) $(CACHE_ARGS)
@@ -112,6 +112,22 @@ bench: deps
 	  $(PY) -m golden.bench --scene $$s --rays $$G/rays.npy > build/bench/$$n/embree.json || exit $$?; \
 	  $(PY) -m dse.bench_table $$n build/bench/$$n/model.json build/bench/$$n/embree.json; \
 	done
+
+# The cache model against the RTL on the same rays and caches at BENCH_CACHE_TUS (docs/caches.md): miss rates,
+# rays/s vs the model's bandwidth bound, wall time per ray. Per scene: build/bench-caches/<scene>/{*.json,bench.csv}.
+BENCH_CACHE_TUS ?= 1 8 32
+BENCH_NODE_CACHE ?= 8192
+bench-caches: deps
+	@set -o pipefail; for s in $(BENCH_SCENES); do \
+	  [ -f "$$s" ] || { echo "[bench-caches] skip $$s (absent)"; continue; }; \
+	  n=$$(basename $$s .obj); d=build/bench-caches/$$n; G=$$d/golden; mkdir -p $$d; \
+	  [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=32 HEIGHT=24 >/dev/null || exit $$?; \
+	  for t in $(BENCH_CACHE_TUS); do echo "[bench-caches] $$n TUS=$$t" >&2; \
+	    $(MAKE) --no-print-directory simulate SCENE=$$s GOLDEN=$$G CONFIG=paper2017 TUS=$$t NODE_CACHE=$(BENCH_NODE_CACHE) OUT=$$d/sim-tu$$t \
+	      | tail -n 1 > $$d/sim-tu$$t.json || exit $$?; \
+	    $(MAKE) --no-print-directory cachesim SCENE=$$s GOLDEN=$$G CONFIG=paper2017 TUS=$$t NODE_CACHE=$(BENCH_NODE_CACHE) EXTRA_CACHESIM="--repeat 5" \
+	      | tail -n 1 > $$d/model-tu$$t.json || exit $$?; done; \
+	  $(PY) -m dse.bench_caches $$d/bench.csv $$n $$d || exit $$?; done
 
 # ---------------------------------------------------------------- RTL
 VCONFIG = $(if $(filter fit,$(CONFIG)),paper2017,$(CONFIG))

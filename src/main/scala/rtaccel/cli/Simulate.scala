@@ -141,7 +141,7 @@ object Simulate {
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
         "prim_bytes_per_ray" -> counters("prim_requests") * p.primAccessBytes / n,
         "mem_utilisation" -> counters("mem_busy_beats") * axi.beatBytes / (math.max(1, cycles) * peakBytesPerCycle),
-        "sim_cycles_per_wall_s" -> stepped / simWall,
+        "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall,
         "scene" -> label, "config" -> p.name, "tus" -> p.tus, "m" -> p.m, "mppl" -> p.mppl,
         "stack_overflow_rays" -> overflow, "model_stack_overflow_rays" -> stats.overflows,
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
