@@ -12,6 +12,7 @@ import os
 
 import numpy as np
 
+from dse.axes import log2_x
 from scenes.cli import ArgParser, atomic_file, run
 from scenes.errors import UserError
 
@@ -80,13 +81,7 @@ def plot_bandwidth(d, out):
     ax.plot(x, c["node_bytes_per_ray"][order], "o-", label="node")
     ax.plot(x, c["prim_bytes_per_ray"][order], "s-", label="primitive")
     ax.plot(x, c["total_bytes_per_ray"][order], "^-", label="total")
-    ax.set_xscale("log", base=2)
-    ax.set_xticks(x)
-    ax.set_xticklabels([f"{v:g}" for v in x])
-    ax.set_xlabel("max primitives per leaf (MPPL)")
-    ax.set_ylabel("bytes per ray")
-    ax.set_ylim(bottom=0)
-    ax.grid(True, alpha=0.3)
+    log2_x(ax, x, "max primitives per leaf (MPPL)", "bytes per ray")
     ax.legend()
     ax.set_title(_title("Bandwidth per ray vs MPPL", comments), fontsize=10)
     fig.tight_layout(rect=(0, 0.03 + 0.025 * len(comments), 1, 1))

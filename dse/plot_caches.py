@@ -14,6 +14,7 @@ import os
 
 import numpy as np
 
+from dse.axes import log2_x
 from scenes.cli import ArgParser, atomic_file, run
 from scenes.errors import UserError
 
@@ -138,13 +139,7 @@ def plot_fig11(tables, out):
         ax.plot(sizes, 100 * rates["bf"], "s--", color="0.4", label="breadth first")
         for k in range(7):
             ax.plot(sizes, 100 * rates[f"lrp{k}"], ".-", color=lrp_colors[k], lw=1, label=f"LRP{k}")
-        ax.set_xscale("log", base=2)
-        ax.set_xticks(sizes)
-        ax.set_xticklabels([f"{s:g}" for s in sizes])
-        ax.set_xlabel("node cache size (entries)")
-        ax.set_ylabel("miss rate (%)")
-        ax.set_ylim(bottom=0)
-        ax.grid(True, alpha=0.3)
+        log2_x(ax, sizes, "node cache size (entries)", "miss rate (%)")
         ax.set_title(f"{scene_name(comments, path)}: miss rate vs cache size", fontsize=10)
         ax.legend(fontsize=7, ncol=2)
     _finish(fig, [c[1][0] for c in tables if c[1]], out)

@@ -9,10 +9,16 @@ import rtaccel.cli.{Cli, EmitVerilog}
   * pass `verilator --lint-only -Wall` with only the written-down waivers of tools/lint.vlt.
   */
 class VerilogLintSpec extends AnyFunSuite {
-  for ((cfg, m, tus) <- Seq(("paper2017", 4, 32), ("small", 2, 1), ("paper2017-lrp", 8, 2)))
-    test(s"$cfg with M=$m, TUs=$tus emits SystemVerilog that is lint clean") {
+  // the last three carry caches: every policy family the RTL builds, on both paths
+  for ((cfg, m, tus, caches) <- Seq(("paper2017", 4, 32, ""), ("small", 2, 1, ""), ("paper2017-lrp", 8, 2, ""),
+      ("paper2017", 4, 8, "--node-cache 8192 --prim-cache 1024 --prim-ways 2"),
+      ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru"),
+      ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
+      ("small", 4, 1, "--node-cache 64 --node-policy bf")))
+    test(s"$cfg with M=$m, TUs=$tus${if (caches.isEmpty) "" else s", caches $caches"} emits SystemVerilog that is lint clean") {
       val out = Files.createTempDirectory(s"lint-$cfg")
-      val args = Array("--config", cfg, "--m", m.toString, "--tus", tus.toString, "--out", out.toString)
+      val args = Array("--config", cfg, "--m", m.toString, "--tus", tus.toString, "--out", out.toString) ++
+        caches.split(" ").filter(_.nonEmpty)
       assert(Cli.status(args)(a => EmitVerilog.main0(a)) == 0)
       val files = Files.list(out).toArray.map(_.toString).filter(_.endsWith(".sv")).toSeq
       assert(files.exists(_.endsWith("RtAccelTop.sv")))
