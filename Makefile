@@ -114,13 +114,13 @@ bench: deps
 	done
 
 # The cache model against the RTL on the same rays and caches at BENCH_CACHE_TUS (docs/caches.md): miss rates,
-# rays/s vs the model's bandwidth bound, wall time per ray. Per scene: build/bench-caches/<scene>/{*.json,bench.csv}.
+# rays/s vs the model's bandwidth bound, wall time per ray. Per scene: build/bench-caches/<scene>-node<N>/{*.json,bench.csv}.
 BENCH_CACHE_TUS ?= 1 8 32
 BENCH_NODE_CACHE ?= 8192
 bench-caches: deps
 	@set -o pipefail; for s in $(BENCH_SCENES); do \
 	  [ -f "$$s" ] || { echo "[bench-caches] skip $$s (absent)"; continue; }; \
-	  n=$$(basename $$s .obj); d=build/bench-caches/$$n; G=$$d/golden; mkdir -p $$d; \
+	  n=$$(basename $$s .obj); d=build/bench-caches/$$n-node$(BENCH_NODE_CACHE); G=build/bench-caches/$$n/golden; mkdir -p $$d; \
 	  [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=32 HEIGHT=24 >/dev/null || exit $$?; \
 	  for t in $(BENCH_CACHE_TUS); do echo "[bench-caches] $$n TUS=$$t" >&2; \
 	    $(MAKE) --no-print-directory simulate SCENE=$$s GOLDEN=$$G CONFIG=paper2017 TUS=$$t NODE_CACHE=$(BENCH_NODE_CACHE) OUT=$$d/sim-tu$$t \

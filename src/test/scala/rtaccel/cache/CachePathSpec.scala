@@ -30,7 +30,7 @@ class PolicyTablesSpec extends AnyFlatSpec with ChiselScalatestTester {
   behavior of "PolicyTables"
   for ((name, ways) <- Seq("lru" -> 2, "lru" -> 4, "plru" -> 4, "plru" -> 8)) it should s"equal $name $ways-way touch/victim in every reachable state" in {
     val pol = Policies.byName(name, ways)
-    test(new PolicyTableHarness(pol)) { dut =>
+    test(new PolicyTableHarness(pol)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut => // 8-way PLRU: ~1 min in treadle
       for (s <- pol.states) {
         dut.io.state.poke(s.U)
         assert(dut.io.victim.peek().litValue == pol.victim(s), s"victim of state $s")
@@ -42,7 +42,7 @@ class PolicyTablesSpec extends AnyFlatSpec with ChiselScalatestTester {
     }
   }
   it should "equal LevelPolicy.allocate for all 16 x 16 x 16 levels and MAX_LEVELs" in {
-    test(new PolicyTableHarness(Policies.byName("dm", 1))) { dut =>
+    test(new PolicyTableHarness(Policies.byName("dm", 1))).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
       for (ml <- 0 to 15; v <- 0 to 15; i <- 0 to 15) {
         dut.io.maxLevel.poke(ml.U); dut.io.vLevel.poke(v.U); dut.io.iLevel.poke(i.U)
         assert(dut.io.allocate.peek().litToBoolean == LevelPolicy.allocate(v, i, ml), s"allocate($v, $i, $ml)")

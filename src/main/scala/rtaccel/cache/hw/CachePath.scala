@@ -84,9 +84,15 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
       (base.U +& local)(math.max(1, lineBits) - 1, 0)
     }
     val mainIdx = index(main, 0, ds.head.way)
+    // after reset every set is cleared once (a SyncReadMem has no reset), one set per cycle
+    val maxSets = arrays.map(_.sets).max
+    val clearIdx = RegInit(0.U(log2Ceil(maxSets + 1).W))
+    val clearing = clearIdx =/= maxSets.U
+    when(clearing) { clearIdx := clearIdx + 1.U }
+    ready := !clearing
     if (!isHybrid) {
       hit := ds.head.hit; fill := ds.head.fill; dataLine := mainIdx
-      main.commit(s1.line, ds.head, s1Fire)
+      main.update(s1.line, ds.head, s1Fire, clearing, clearIdx)
     } else {
       // a line is in at most one array; the DM line is replaced when the level policy allows, else the side
       // array is offered the line (its own empty/LRU victim + level rule); refused there too = bypass
@@ -95,18 +101,9 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
       hit := dm.hit || side.hit
       fill := !hit && (dm.fill || side.fill)
       dataLine := Mux(dm.hit || (!side.hit && dm.fill), mainIdx, sideIdx)
-      main.commit(s1.line, dm, s1Fire && !side.hit)
-      arrays(1).commit(s1.line, side, s1Fire && (side.hit || (!dm.hit && !dm.fill)))
+      main.update(s1.line, dm, s1Fire && !side.hit, clearing, clearIdx)
+      arrays(1).update(s1.line, side, s1Fire && (side.hit || (!dm.hit && !dm.fill)), clearing, clearIdx)
     }
-    // after reset every set is cleared once (a SyncReadMem has no reset)
-    val maxSets = arrays.map(_.sets).max
-    val clearIdx = RegInit(0.U(log2Ceil(maxSets + 1).W))
-    val clearing = clearIdx =/= maxSets.U
-    when(clearing) {
-      clearIdx := clearIdx + 1.U
-      for (a <- arrays) when(clearIdx < a.sets.U) { a.clear(clearIdx(math.max(1, a.setBits) - 1, 0)) }
-    }
-    ready := !clearing
   }
 
   ticketQ.io.enq.valid := s1Fire
@@ -130,7 +127,9 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
   private def preload(): Unit = {
     val started = RegInit(false.B); val done = RegInit(false.B)
     val k = RegInit(0.U(log2Ceil(cg.lines + 1).W))
-    val nodesInImage = io.primBase >> log2Ceil(cg.strideBytes)
+    // lines that overlap the node region [0, primBase): rounded up, so a line straddling primBase is read too
+    // (harmless: its id is no node's, so it is never requested)
+    val nodesInImage = (io.primBase +& (cg.strideBytes - 1).U) >> log2Ceil(cg.strideBytes)
     val n = Mux(nodesInImage < cg.lines.U, nodesInImage, cg.lines.U)
     when(io.in.valid) { started := true.B }
     val issuing = started && !done

@@ -14,7 +14,7 @@ class WayEntry(tagBits: Int) extends Bundle {
 /** A set: its ways and the replacement state (one RAM word, read and written whole). */
 class SetEntry(ways: Int, tagBits: Int, stateBits: Int) extends Bundle {
   val way = Vec(ways, new WayEntry(tagBits))
-  val state = UInt(math.max(1, stateBits).W)
+  val state = UInt(stateBits.W) // zero-width (removed) for direct-mapped sets
 }
 
 /** What one access does to a set (combinational, from the set as read): hit, fill (a miss that allocates; a
@@ -47,10 +47,9 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean) {
   def emptyEntry: SetEntry = {
     val e = Wire(entryType)
     e.way.foreach { w => w.valid := false.B; w.tag := 0.U; w.level := 0.U }
-    e.state := pol.init.U
+    e.state := pol.init.U(pol.stateBits.W)
     e
   }
-  def clear(set: UInt): Unit = mem.write(set, emptyEntry)
 
   def decide(e: SetEntry, line: UInt, level: UInt, maxLevel: UInt): Decision = {
     val tag = tagOf(line)
@@ -70,11 +69,17 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean) {
       next.way(w).tag := tag
       next.way(w).level := level
     }
-    next.state := PolicyTables.touch(pol, e.state, way)
+    if (pol.stateBits > 0) next.state := PolicyTables.touch(pol, e.state, way)
     new Decision(hit, fill, if (ways == 1) 0.U else way, next)
   }
 
-  /** Commits a decision (a hit or a fill; nothing to write for a refused fill). */
-  def commit(line: UInt, d: Decision, en: Bool): Unit =
-    when(en && (d.hit || d.fill)) { mem.write(setOf(line), d.next) }
+  /** The one write port: while `clearing`, empties set `clearSet` (the reset sweep); otherwise commits a
+    * decision when `en` (a hit or a fill; nothing to write for a refused fill).
+    */
+  def update(line: UInt, d: Decision, en: Bool, clearing: Bool, clearSet: UInt): Unit = {
+    val clearThis = clearing && clearSet < sets.U
+    when(clearThis || (!clearing && en && (d.hit || d.fill))) {
+      mem.write(Mux(clearThis, clearSet(math.max(1, setBits) - 1, 0), setOf(line)), Mux(clearThis, emptyEntry, d.next))
+    }
+  }
 }
