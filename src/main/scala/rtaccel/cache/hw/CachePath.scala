@@ -127,14 +127,13 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
   private def preload(): Unit = {
     val started = RegInit(false.B); val done = RegInit(false.B)
     val k = RegInit(0.U(log2Ceil(cg.lines + 1).W))
-    // lines that overlap the node region [0, primBase): rounded up, so a line straddling primBase is read too
-    // (harmless: its id is no node's, so it is never requested)
-    val nodesInImage = (io.primBase +& (cg.strideBytes - 1).U) >> log2Ceil(cg.strideBytes)
-    val n = Mux(nodesInImage < cg.lines.U, nodesInImage, cg.lines.U)
+    // line k is read while it starts inside the node region [0, primBase) and k < lines
+    val kAddr = k << log2Ceil(cg.strideBytes)
+    val more = k < cg.lines.U && kAddr < io.primBase
     when(io.in.valid) { started := true.B }
     val issuing = started && !done
-    val issue = issuing && k < n && ticketQ.io.enq.ready && missQ.io.enq.ready
-    when(issuing && k >= n) { done := true.B }
+    val issue = issuing && more && ticketQ.io.enq.ready && missQ.io.enq.ready
+    when(issuing && !more) { done := true.B }
     when(issue) { k := k + 1.U }
     ready := done
     when(issue) {
@@ -145,7 +144,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
       ticketQ.io.enq.bits.line := k
       ticketQ.io.enq.bits.beats := cg.lineBeats.U
       missQ.io.enq.valid := true.B
-      missQ.io.enq.bits.addr := k << log2Ceil(cg.strideBytes)
+      missQ.io.enq.bits.addr := kAddr
       missQ.io.enq.bits.beats := cg.lineBeats.U
     }
   }
