@@ -2,7 +2,7 @@
 
 DIR holds, per TU count N, `sim-tuN.json` (make simulate, last line) and `model-tuN.json` (make cachesim with
 the same rays, caches and TUS=N, last line). For each N: node-cache miss rate of the RTL vs the fast model's
-N-TU interleaving, rays/s of the RTL vs the model's bandwidth bound, and wall time per ray of each (RTL:
+N-TU interleaving, rays/s of the RTL vs the model's prediction (MVA, rtaccel.cache.Throughput) and bandwidth bound, and wall time per ray of each (RTL:
 simulation only, build excluded; model: the replay, median of its repeats, and trace + replay). Prints a table
 and, last, one JSON line; writes OUT.csv with a provenance line. Bad input: one `error:` line, exit 2.
 """
@@ -40,6 +40,8 @@ def rows(d):
             "miss_rate_diff_points": 100 * (mc["miss_rate"] - sc["miss_rate"]),
             "rtl_counts_match_model_same_order": s["cache_counts_match_model"],
             "rtl_rays_per_s": s["rays_per_s_at_clock"], "model_bw_bound_rays_per_s": m["bandwidth_bound_rays_per_s"],
+            "model_predicted_rays_per_s": m["predicted_rays_per_s"],
+            "predicted_over_rtl": m["predicted_rays_per_s"] / s["rays_per_s_at_clock"],
             "rtl_dram_bytes_per_ray": s["dram_bytes_per_ray"], "model_dram_bytes_per_ray": m["dram_bytes_per_ray"],
             "rtl_sim_wall_s": sim_wall, "rtl_us_per_ray": 1e6 * sim_wall / rays,
             "model_replay_us_per_ray": 1e6 * m["wall_s"] / rays,
@@ -61,11 +63,12 @@ def main(out_csv, name, d):
     os.replace(tmp, out_csv)
     print(f"[bench-caches] {name}: {rs[0]['rays']} rays, node cache {rs[0]['entries']} {rs[0]['policy']}; "
           f"RTL = Verilator simulation (build excluded), model = trace-driven replay (median of {rs[0]['model_repeat']})")
-    print(f"  {'TUs':>4} {'miss RTL':>9} {'model':>8} {'diff pp':>8} {'rays/s RTL':>11} {'model BW bound':>14} "
+    print(f"  {'TUs':>4} {'miss RTL':>9} {'model':>8} {'diff pp':>8} {'rays/s RTL':>11} {'predicted':>10} {'pred/RTL':>8} {'BW bound':>9} "
           f"{'us/ray RTL':>10} {'model':>7} {'+trace':>7} {'RTL/model':>9} {'accesses/s':>10}")
     for r in rs:
         print(f"  {r['tus']:>4} {100 * r['rtl_miss_rate']:8.3f}% {100 * r['model_miss_rate']:7.3f}% "
-              f"{r['miss_rate_diff_points']:+8.3f} {r['rtl_rays_per_s']:11.4g} {r['model_bw_bound_rays_per_s']:14.4g} "
+              f"{r['miss_rate_diff_points']:+8.3f} {r['rtl_rays_per_s']:11.4g} {r['model_predicted_rays_per_s']:10.4g} "
+              f"{r['predicted_over_rtl']:8.2f} {r['model_bw_bound_rays_per_s']:9.4g} "
               f"{r['rtl_us_per_ray']:10.1f} {r['model_replay_us_per_ray']:7.3f} {r['model_trace_replay_us_per_ray']:7.2f} "
               f"{r['rtl_us_per_ray'] / r['model_replay_us_per_ray']:8.0f}x {r['model_accesses_per_s']:10.3g}")
     print(json.dumps({"scene": name, "csv": out_csv, "rows": rs}))

@@ -16,7 +16,7 @@ def sim(tus, misses, hits, cycles, wall):
 
 def model(tus, misses, hits, wall, trace):
     return {"rays": 1000, "tus": tus, "node_cache": {"entries": 8192, "policy": "dm", "miss_rate": misses / (hits + misses)},
-            "bandwidth_bound_rays_per_s": 2e6, "dram_bytes_per_ray": 290.0, "wall_s": wall, "trace_s": trace,
+            "bandwidth_bound_rays_per_s": 2e6, "predicted_rays_per_s": 6e4, "dram_bytes_per_ray": 290.0, "wall_s": wall, "trace_s": trace,
             "accesses_per_s": 3e7, "repeat": 5}
 
 
@@ -40,6 +40,7 @@ def test_table_csv_and_json(tmp_path, capsys):
     assert r1["miss_rate_diff_points"] == pytest.approx(0.0)
     assert r8["miss_rate_diff_points"] == pytest.approx(-0.5)  # model 5.5 % vs RTL 6.0 %
     assert r1["rtl_us_per_ray"] == pytest.approx(12_000.0)
+    assert r1["predicted_over_rtl"] == pytest.approx(6e4 / (1000 / 3_000_000 * 150e6))
     assert r1["model_replay_us_per_ray"] == pytest.approx(2.0)
     assert r1["model_trace_replay_us_per_ray"] == pytest.approx(52.0)
 

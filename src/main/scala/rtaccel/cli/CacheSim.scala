@@ -62,6 +62,7 @@ object CacheSim {
     val sustained = p.memory.bytesPerSecond * p.memory.sustainedEfficiency // = clock x sustained bytes per cycle
     def bound(bpr: Double): Double = if (bpr > 0) sustained / bpr else Double.PositiveInfinity
     a.opt("sweep-out").foreach(out => sweep(rows, java.nio.file.Paths.get(out), tus))
+    val pred = rtaccel.cache.Throughput.predict(p, sink, rays.count, tus)
     val j = ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
       "tus" -> tus, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
@@ -74,6 +75,9 @@ object CacheSim {
       "bandwidth_bound_rays_per_s" -> bound(nodeBpr + primBpr),
       "bandwidth_bound_rays_per_s_nocache" -> bound(nodeBprNoCache + primBprNoCache),
       "bandwidth_bound_note" -> "clock x sustained DRAM bytes/cycle / DRAM bytes per ray; ignores compute and latency limits",
+      "predicted_rays_per_s" -> pred.raysPerCycle * p.cyclesPerSecond,
+      "predicted_cycles_per_ray" -> ujson.Obj("latency_one_tu" -> pred.latencyCycles, "dram" -> pred.dramCycles, "beats" -> pred.beatCycles),
+      "predicted_note" -> "MVA of TUS rays in flight over DRAM and the MC response port (rtaccel.cache.Throughput); ignores head-of-line blocking",
       "trace_s" -> traceS, "wall_s" -> wall, "accesses_per_s" -> accesses / math.max(wall, 1e-9),
       "repeat" -> repeat, "wall_s_first" -> runs.head._2)
     println(ujson.write(j))
