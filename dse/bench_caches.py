@@ -33,7 +33,7 @@ def rows(d):
         if sc.get("entries", 0) == 0 or sc["entries"] != mc["entries"] or sc["policy"] != mc["policy"]:
             raise SystemExit(f"error: TUS={n}: RTL and model must simulate the same node cache")
         rays = s["rays"]
-        sim_wall = s.get("sim_wall_s", s["cycles"] / s["sim_cycles_per_wall_s"])
+        sim_wall = s["sim_wall_s"]
         out.append({
             "tus": n, "rays": rays, "policy": sc["policy"], "entries": sc["entries"],
             "rtl_miss_rate": sc["miss_rate"], "model_miss_rate": mc["miss_rate"],

@@ -23,6 +23,16 @@ final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[C
   }
 }
 
+object CacheSink {
+  /** The node and primitive cache models of a configuration (None where entries = 0). The primitive cache's
+    * lines hold one leaf of up to MPPL primitives. Throws on bad geometry.
+    */
+  def apply(p: rtaccel.config.PlatformParams): CacheSink = new CacheSink(
+    if (p.nodeCache.entries > 0) Some(new CacheModel(p.nodeCache)) else None,
+    if (p.primCache.entries > 0) Some(new CacheModel(p.primCache, identity, p.mppl)) else None,
+    p.nodeAccessBytes, p.primAccessBytes)
+}
+
 /** Replays a recorded access trace (AccessRecorder rows: ray, kind, id/first, level, count) into a sink.
   *
   * Model of N traversal units: N ray slots are active at once; the replay visits slots round-robin and issues

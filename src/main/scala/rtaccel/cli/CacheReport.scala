@@ -11,16 +11,11 @@ import rtaccel.config.{CacheParams, PlatformParams}
 object CacheReport {
   final case class Report(node: ujson.Value, prim: ujson.Value, matches: ujson.Value)
 
-  private def sinkOf(p: PlatformParams): CacheSink = {
-    val (nc, pc) = CacheSim.models(p, p.nodeCache, p.primCache)
-    new CacheSink(nc, pc, p.nodeAccessBytes, p.primAccessBytes)
-  }
-
   def simulate(p: PlatformParams, counters: Map[String, Long], logged: Array[Int], rows: Array[Int], codec: RefCodec): Report = {
     val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
     if (!cached) return Report(absent, absent, ujson.Null)
-    val same = sinkOf(p); Replay.refs(logged, codec, same)
-    val inter = sinkOf(p); Replay.interleaved(rows, p.tus, inter)
+    val same = CacheSink(p); Replay.refs(logged, codec, same)
+    val inter = CacheSink(p); Replay.interleaved(rows, p.tus, inter)
     var ok = true
     def one(name: String, c: CacheParams, sameM: Option[CacheModel], interM: Option[CacheModel]): ujson.Value = (sameM, interM) match {
       case (Some(s), Some(i)) =>

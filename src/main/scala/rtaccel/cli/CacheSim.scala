@@ -2,7 +2,7 @@ package rtaccel.cli
 
 import rtaccel.bvh.MemoryImage
 import rtaccel.cache.{CacheModel, CacheSink, Replay}
-import rtaccel.config.{CacheParams, PlatformParams}
+import rtaccel.config.CacheParams
 import rtaccel.io.InputError
 import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
 
@@ -15,19 +15,15 @@ import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
 object CacheSim {
   def main(args: Array[String]): Unit = Cli.run(args)(main0)
 
-  def models(p: PlatformParams, node: CacheParams, prim: CacheParams): (Option[CacheModel], Option[CacheModel]) = (
-    if (node.entries > 0) Some(new CacheModel(node)) else None,
-    if (prim.entries > 0) Some(new CacheModel(prim, identity, p.mppl)) else None)
-
   def main0(a: Args): Unit = {
-    val node = Cli.cacheArg(a, "node")
-    val prim = Cli.cacheArg(a, "prim")
     val tus = a.int("tus", 1)
     if (tus < 1 || tus > 1024) throw new InputError(s"TUS must be in 1..1024 (got $tus)")
+    val p0 = Cli.params(a) // refuses bad cache values before the scene is loaded
     val (scene, rays, _) = Cli.inputs(a)
-    val b = Cli.build(scene, Cli.params(a), Cli.fitRequested(a))
+    val b = Cli.build(scene, p0, Cli.fitRequested(a))
     val p = b.params
-    models(p, node, prim) // validate geometry before the traversal runs
+    val (node, prim) = (p.nodeCache, p.primCache)
+    CacheSink(p) // validate geometry before the traversal runs
     val img = MemoryImage.pack(b.bvh, b.scene, p)
     // Record once; the replay (1 or N TUs) is what is timed as the cache model.
     val rec = new AccessRecorder; val st = new RayStats
@@ -39,8 +35,7 @@ object CacheSim {
     val repeat = a.int("repeat", 1)
     if (repeat < 1) throw new InputError(s"--repeat must be at least 1 (got $repeat)")
     val runs = (1 to repeat).map { _ =>
-      val (nc, pc) = models(p, node, prim)
-      val sink = new CacheSink(nc, pc, p.nodeAccessBytes, p.primAccessBytes)
+      val sink = CacheSink(p)
       val t1 = System.nanoTime()
       Replay.interleaved(rows, tus, sink)
       (sink, (System.nanoTime() - t1) / 1e9)

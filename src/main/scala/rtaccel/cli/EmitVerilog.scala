@@ -16,8 +16,6 @@ object EmitVerilog {
     val p0 = Cli.params(a)
     val p = p0.copy(name = cfg)
     rtaccel.cache.hw.CachePath.validate(p)
-    if (rtaccel.config.Fit.levelAware(p) && p.refs.levelBits == 0)
-      throw new rtaccel.io.InputError(s"NODE_POLICY=${p.nodeCache.policy} needs a level field in node references; use CONFIG=paper2017-lrp")
     val out = Paths.get(a.get("out", s"build/$cfg"))
     Files.createDirectories(out)
     // a previous configuration's modules must not linger next to this one's

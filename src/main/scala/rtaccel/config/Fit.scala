@@ -34,6 +34,12 @@ object Fit {
       stackDepth = n.stackDepth)
   }
 
+  /** Level-aware node caches read each node's level from its reference: the config must have the field. */
+  def checkLevelField(p: PlatformParams): Unit =
+    if (levelAware(p) && p.refs.levelBits == 0)
+      throw new InputError(s"NODE_POLICY=${p.nodeCache.policy} reads each node's level from its reference, but config '${p.name}' " +
+        "has no level field; use CONFIG=paper2017-lrp or CONFIG=fit")
+
   /** Refuses a scene that exceeds a fixed configuration, naming the field and both numbers. */
   def check(p: PlatformParams, bvh: Mbvh, sceneName: String): Unit = {
     val n = needs(bvh)
@@ -43,9 +49,7 @@ object Fit {
       refuse("node id field", s"${n.nodeIdBits} bits (${n.nodes} nodes)", s"${p.refs.nodeIdBits} bits", "use CONFIG=fit or widen nodeIdBits")
     if (n.primIndexBits > p.refs.primIndexBits)
       refuse("primitive index field", s"${n.primIndexBits} bits (${n.prims} primitives)", s"${p.refs.primIndexBits} bits", "use CONFIG=fit or widen primIndexBits")
-    if (levelAware(p) && p.refs.levelBits == 0)
-      throw new InputError(s"NODE_POLICY=${p.nodeCache.policy} reads each node's level from its reference, but config '${p.name}' " +
-        "has no level field; use CONFIG=paper2017-lrp or CONFIG=fit")
+    checkLevelField(p)
     if (n.stackDepth > p.stackDepth)
       refuse("traversal stack", s"${n.stackDepth} entries (tree of ${n.maxLevel + 1} levels)", s"${p.stackDepth} entries", "raise stackDepth, raise MPPL or use CONFIG=fit")
   }

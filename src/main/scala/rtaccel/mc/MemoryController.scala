@@ -40,6 +40,19 @@ class PathStats extends Bundle {
   val bypasses = UInt(48.W)
 }
 
+/** What the MC counts (48-bit, never cleared): requests by kind, primitives and bytes requested, R beats
+  * received (DRAM busy), and each path's cache statistics.
+  */
+class McCounters extends Bundle {
+  val nodeRequests = UInt(48.W)
+  val leafRequests = UInt(48.W)
+  val primsRequested = UInt(48.W)
+  val bytesRequested = UInt(48.W)
+  val busyBeats = UInt(48.W)
+  val nodeCache = new PathStats
+  val primCache = new PathStats
+}
+
 /** Sizes shared by the MC and its paths. */
 final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   require(axi.beatBytes <= p.primStrideBytes && axi.beatBytes <= p.nodeStrideBytes,
@@ -169,13 +182,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     val primBase = Input(UInt(ap.addrBits.W))
     val maxLevel = Input(UInt(4.W)) // MAX_LEVEL register of the level replacement policy
     val axi = new AxiReadMaster(ap)
-    val nodeCache = Output(new PathStats)
-    val primCache = Output(new PathStats)
-    val nodeRequests = Output(UInt(48.W))
-    val leafRequests = Output(UInt(48.W))
-    val primsRequested = Output(UInt(48.W))
-    val bytesRequested = Output(UInt(48.W))
-    val busyBeats = Output(UInt(48.W))
+    val counters = Output(new McCounters)
   })
   val f = p.refs
   require(respBufferBeats == 0 || respBufferBeats >= g.maxBeats,
@@ -218,8 +225,8 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     path.io.primBase := io.primBase
     path.io.maxLevel := io.maxLevel
   }
-  io.nodeCache := paths(NodePath).io.stats
-  io.primCache := paths(PrimPath).io.stats
+  io.counters.nodeCache := paths(NodePath).io.stats
+  io.counters.primCache := paths(PrimPath).io.stats
 
   // ---- DRAM side: arbiter -> burst splitter -> AR; R routed back by the memory-order FIFO
   val arb = Module(new RRArbiter(g.memReq, 2))
@@ -282,11 +289,11 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     c
   }
   val reqFire = io.req.fire
-  io.nodeRequests := counter(1.U, reqFire && !isLeaf)
-  io.leafRequests := counter(1.U, reqFire && isLeaf)
-  io.primsRequested := counter(count, reqFire && isLeaf)
-  io.bytesRequested := counter(Mux(isLeaf, count << log2Ceil(p.primStrideBytes), p.nodeStrideBytes.U), reqFire)
-  io.busyBeats := counter(1.U, io.axi.r.fire)
+  io.counters.nodeRequests := counter(1.U, reqFire && !isLeaf)
+  io.counters.leafRequests := counter(1.U, reqFire && isLeaf)
+  io.counters.primsRequested := counter(count, reqFire && isLeaf)
+  io.counters.bytesRequested := counter(Mux(isLeaf, count << log2Ceil(p.primStrideBytes), p.nodeStrideBytes.U), reqFire)
+  io.counters.busyBeats := counter(1.U, io.axi.r.fire)
 
   when(io.axi.r.valid) { assert(memOrder.io.deq.valid, "MemoryController: an R beat with no read outstanding") }
   if (respBufferBeats > 0)

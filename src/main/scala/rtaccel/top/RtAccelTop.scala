@@ -96,7 +96,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
     "tu_busy_cycles" -> ev(PopCount(tuBusy)))
   for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := events(n)
-  regs.io.counters := VecInit(perf.io.values ++ Seq(mc.io.nodeRequests, mc.io.leafRequests, mc.io.primsRequested,
-    mc.io.bytesRequested, mc.io.busyBeats, mc.io.nodeCache.hits, mc.io.nodeCache.misses, mc.io.nodeCache.bypasses,
-    mc.io.primCache.hits, mc.io.primCache.misses, mc.io.primCache.bypasses).map(_.pad(64)))
+  val mcc = mc.io.counters // in memoryNames order
+  regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
+    mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,
+    mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses).map(_.pad(64)))
 }

@@ -67,8 +67,7 @@ class CachePathSpec extends McCases {
 
   private def modelCounts(img: MemoryImage, node: CacheParams, prim: CacheParams, refs: Seq[Int]): CacheSink = {
     val p = img.p.copy(nodeCache = node, primCache = prim)
-    val (nc, pc) = rtaccel.cli.CacheSim.models(p, node, prim)
-    val sink = new CacheSink(nc, pc, p.nodeAccessBytes, p.primAccessBytes)
+    val sink = CacheSink(p)
     Replay.refs(refs.toArray, new RefCodec(p.refs), sink)
     sink
   }
@@ -81,7 +80,7 @@ class CachePathSpec extends McCases {
       maxLevel = node.maxLevel, pick = skewed, annotations = Seq(VerilatorBackendAnnotation), // policy tables are slow in treadle
       afterRun = (dut: McHarness, refs: Seq[Int], img: MemoryImage) => {
         val m = modelCounts(img, node, prim, refs)
-        for ((name, stats, model) <- Seq(("node", dut.io.nodeCache, m.nodeCache), ("prim", dut.io.primCache, m.primCache))) {
+        for ((name, stats, model) <- Seq(("node", dut.io.counters.nodeCache, m.nodeCache), ("prim", dut.io.counters.primCache, m.primCache))) {
           val (h, mi, b) = (stats.hits.peek().litValue, stats.misses.peek().litValue, stats.bypasses.peek().litValue)
           model match {
             case Some(c) =>

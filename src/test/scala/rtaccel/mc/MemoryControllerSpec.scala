@@ -37,13 +37,7 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
     val resp = chisel3.util.Decoupled(new FetchBeat(axi.dataBits))
     val primBase = Input(UInt(axi.addrBits.W))
     val maxLevel = Input(UInt(4.W))
-    val nodeCache = Output(new PathStats)
-    val primCache = Output(new PathStats)
-    val nodeRequests = Output(UInt(48.W))
-    val leafRequests = Output(UInt(48.W))
-    val primsRequested = Output(UInt(48.W))
-    val bytesRequested = Output(UInt(48.W))
-    val busyBeats = Output(UInt(48.W))
+    val counters = Output(new McCounters)
     val arBursts = Output(UInt(32.W))
     val maxLen = Output(UInt(8.W))
     val badBurst = Output(Bool())
@@ -61,13 +55,7 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
   io.resp <> mc.io.resp
   mc.io.primBase := io.primBase
   mc.io.maxLevel := io.maxLevel
-  io.nodeCache := mc.io.nodeCache
-  io.primCache := mc.io.primCache
-  io.nodeRequests := mc.io.nodeRequests
-  io.leafRequests := mc.io.leafRequests
-  io.primsRequested := mc.io.primsRequested
-  io.bytesRequested := mc.io.bytesRequested
-  io.busyBeats := mc.io.busyBeats
+  io.counters := mc.io.counters
   val ars = RegInit(0.U(32.W))
   val maxLen = RegInit(0.U(8.W))
   val bad = RegInit(false.B)
@@ -147,11 +135,11 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
         val leaves = refs.filter(codec.isPrim)
         val prims = leaves.map(codec.count).sum
         val totalBytes = refs.map(span(_)._2.toLong).sum
-        assert(dut.io.nodeRequests.peek().litValue == refs.length - leaves.length)
-        assert(dut.io.leafRequests.peek().litValue == leaves.length)
-        assert(dut.io.primsRequested.peek().litValue == prims)
-        assert(dut.io.bytesRequested.peek().litValue == totalBytes)
-        if (pathFactory eq FetchPath.passThrough) assert(dut.io.busyBeats.peek().litValue == expected.length)
+        assert(dut.io.counters.nodeRequests.peek().litValue == refs.length - leaves.length)
+        assert(dut.io.counters.leafRequests.peek().litValue == leaves.length)
+        assert(dut.io.counters.primsRequested.peek().litValue == prims)
+        assert(dut.io.counters.bytesRequested.peek().litValue == totalBytes)
+        if (pathFactory eq FetchPath.passThrough) assert(dut.io.counters.busyBeats.peek().litValue == expected.length)
         assert(!dut.io.badBurst.peek().litToBoolean, "an AR burst crossed 4 KB or had a bad id/burst type")
         val bursts = dut.io.arBursts.peek().litValue
         info(f"${refs.length} refs (${leaves.length} leaves, $prims prims), ${expected.length} beats in $cyc cycles " +
