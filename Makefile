@@ -13,8 +13,6 @@ export PYTHONPATH := $(ROOT)
 # User variables (documented in README.md).
 SCENE   ?= build/scenes/cornell.obj
 CONFIG  ?= fit
-M       ?= 4
-MPPL    ?= 4
 WIDTH   ?= 64
 HEIGHT  ?= 48
 DEPTH   ?= 5
@@ -22,7 +20,11 @@ SEED    ?= 1
 SHARED_SCENES ?= $(abspath ../shared/scenes)
 RUN_CONFIG ?= paper2017
 RUN_NODE_CACHE ?= 8192
-MODEL_ARGS = --config $(CONFIG) --m $(M) --mppl $(MPPL)
+# A preset is the whole platform it names (caches included); each variable given overrides one field, an
+# absent one keeps the preset's value (README "Configurations").
+PLATFORM_KNOBS = $(if $(M),--m $(M)) $(if $(MPPL),--mppl $(MPPL)) $(if $(TUS),--tus $(TUS)) \
+  $(if $(STACK),--stack-depth $(STACK)) $(CACHE_FLAGS)
+MODEL_ARGS = --config $(CONFIG) $(PLATFORM_KNOBS)
 TRIS       = $$(tools/tris $(SCENE))
 
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
@@ -63,9 +65,9 @@ build/scenes/%.obj: | venv
 run: deps build/scenes/cornell.obj
 	@mkdir -p build/run
 	@$(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=build/run/golden
-	@$(MAKE) --no-print-directory check SCENE=$(SCENE) GOLDEN=build/run/golden | tee build/run/check.log
-	@$(MAKE) --no-print-directory analyze SCENE=$(SCENE) GOLDEN=build/run/golden OUT=build/run/analysis | tee build/run/analyze.log
-	@$(MAKE) --no-print-directory simulate SCENE=$(SCENE) GOLDEN=build/run/golden CONFIG=$(RUN_CONFIG) NODE_CACHE=$(RUN_NODE_CACHE) OUT=build/run/simulate | tee build/run/simulate.log
+	@set -o pipefail; $(MAKE) --no-print-directory check SCENE=$(SCENE) GOLDEN=build/run/golden | tee build/run/check.log
+	@set -o pipefail; $(MAKE) --no-print-directory analyze SCENE=$(SCENE) GOLDEN=build/run/golden OUT=build/run/analysis | tee build/run/analyze.log
+	@set -o pipefail; $(MAKE) --no-print-directory simulate SCENE=$(SCENE) GOLDEN=build/run/golden CONFIG=$(RUN_CONFIG) NODE_CACHE=$(RUN_NODE_CACHE) OUT=build/run/simulate | tee build/run/simulate.log
 	@$(PY) -m dse.run_summary build/run
 
 # ---------------------------------------------------------------- user commands
@@ -80,11 +82,12 @@ trace: deps
 	@T=$(TRIS) && $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $(RAYS) --out $(OUT) $(MODEL_ARGS)
 
 # Node/primitive cache models on the traversal's accesses (docs/caches.md). Last stdout line: JSON.
-# CACHE_FLAGS: the cache geometry, shared by cachesim and simulate (absent NODE_CACHE/PRIM_CACHE = no cache).
-CACHE_FLAGS = --node-cache $(or $(NODE_CACHE),0) --node-ways $(or $(NODE_WAYS),1) \
-  --max-level $(or $(MAX_LEVEL),15) --prim-cache $(or $(PRIM_CACHE),0) --prim-ways $(or $(PRIM_WAYS),1) \
-  $(if $(NODE_POLICY),--node-policy $(NODE_POLICY)) $(if $(PRIM_POLICY),--prim-policy $(PRIM_POLICY))
-CACHE_ARGS = --tus $(or $(TUS),1) $(CACHE_FLAGS) $(if $(SWEEP),--sweep-out $(SWEEP)) $(EXTRA_CACHESIM)
+# CACHE_FLAGS: the cache variables given (absent ones keep the preset's cache; NODE_CACHE=0 removes it).
+CACHE_FLAGS = $(if $(NODE_CACHE),--node-cache $(NODE_CACHE)) $(if $(NODE_WAYS),--node-ways $(NODE_WAYS)) \
+  $(if $(NODE_POLICY),--node-policy $(NODE_POLICY)) $(if $(MAX_LEVEL),--max-level $(MAX_LEVEL)) \
+  $(if $(PRIM_CACHE),--prim-cache $(PRIM_CACHE)) $(if $(PRIM_WAYS),--prim-ways $(PRIM_WAYS)) \
+  $(if $(PRIM_POLICY),--prim-policy $(PRIM_POLICY))
+CACHE_ARGS = $(if $(SWEEP),--sweep-out $(SWEEP)) $(EXTRA_CACHESIM)
 cachesim: deps
 	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
 	  T=$(TRIS) && $(JAVA) rtaccel.cli.CacheSim --tris "$$T" --scene-label $(SCENE) --rays $$R $(MODEL_ARGS) $(CACHE_ARGS)
@@ -93,7 +96,7 @@ check: deps
 	@test -n "$(GOLDEN)" || { echo "error: give GOLDEN=<dir made by make golden>" >&2; exit 2; }
 	@T=$(TRIS) && O=$$(mktemp -d build/check.XXXXXX) && trap "rm -rf $$O" EXIT && \
 	  $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $(GOLDEN)/rays.npy --out $$O --access-trace 0 $(MODEL_ARGS) >/dev/null && \
-	  $(PY) -m golden.check --tris "$$T" --golden $(GOLDEN) --hits $$O/hits.npy
+	  $(PY) -m golden.check --tris "$$T" --golden $(GOLDEN) --hits $$O/hits.npy $(if $(REPORT_ONLY),--report-only)
 
 analyze: deps
 	@OUT=$${OUT:-build/analyze/$$(basename $(SCENE))}; G=$(GOLDEN); \
@@ -131,9 +134,8 @@ bench-caches: deps
 
 # ---------------------------------------------------------------- RTL
 VCONFIG = $(if $(filter fit,$(CONFIG)),paper2017,$(CONFIG))
-TUS_ARG = $(if $(TUS),--tus $(TUS))
 verilog: deps
-	$(JAVA) rtaccel.cli.EmitVerilog --config $(VCONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) $(CACHE_FLAGS) --out build/$(VCONFIG)
+	$(JAVA) rtaccel.cli.EmitVerilog --config $(VCONFIG) $(PLATFORM_KNOBS) --out build/$(VCONFIG)
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.
 LINT_WAIVERS = tools/lint.vlt
@@ -144,7 +146,7 @@ SIM_ARGS = $(if $(MEM_JITTER),--mem-jitter $(MEM_JITTER)) $(if $(HOST_STALL),--h
 simulate: deps
 	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
 	  OUT=$${OUT:-build/simulate/$$(basename $(SCENE))}; T=$(TRIS) && \
-	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT --config $(CONFIG) --m $(M) --mppl $(MPPL) $(TUS_ARG) $(SIM_ARGS) $(CACHE_FLAGS)
+	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT $(MODEL_ARGS) $(SIM_ARGS)
 
 regress: deps
 	RTACCEL_REGRESS=full $(SBT) "testOnly rtaccel.top.PlatformSpec"
@@ -157,7 +159,7 @@ paper-nocache: deps
 	  [ -f "$$s" ] || { echo "[paper-nocache] skip $$s (absent)"; continue; }; n=$$(basename $$s .obj); d=build/paper-nocache/$$n; \
 	  [ -f $$d/golden/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$d/golden WIDTH=32 HEIGHT=24 >/dev/null || exit $$?; \
 	  T=$$(tools/tris $$s); $(JAVA) rtaccel.cli.SweepTus --tris "$$T" --scene-label $$s --rays $$d/golden/rays.npy --out $$d \
-	    --config paper2017 --m $(M) --mppl $(MPPL) --tus-list $(NOCACHE_TUS) || exit $$?; csvs="$$csvs $$d/tus_sweep.csv"; done; \
+	    --config paper2017 --node-cache 0 --m $(or $(M),4) --mppl $(or $(MPPL),4) --tus-list $(NOCACHE_TUS) || exit $$?; csvs="$$csvs $$d/tus_sweep.csv"; done; \
 	  [ -z "$$csvs" ] || $(PY) -m dse.plot_tus build/paper-nocache/tus_sweep.png $$csvs
 
 # Paper Figs 11 (node-cache miss rate vs size) and 8-9 (DRAM bytes per ray vs MPPL) from the cache model, and
@@ -183,7 +185,7 @@ paper-caches: deps
 	  GT=$$d/golden/$(PAPER_TUS_WIDTH)x$(PAPER_TUS_HEIGHT)-d$(DEPTH)-s$(SEED); \
 	  [ -z "$(PAPER_TUS)" ] || [ "$$GT/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$GT WIDTH=$(PAPER_TUS_WIDTH) HEIGHT=$(PAPER_TUS_HEIGHT) >/dev/null || exit $$?; \
 	  T=$$(tools/tris $$s) || exit $$?; \
-	  $(PY) -m dse.paper_caches --scene $$s --tris "$$T" --rays $$G/rays.npy $$( [ -z "$(PAPER_TUS)" ] || echo --tus-rays $$GT/rays.npy) --out $$d --java '$(JAVA)' --m $(M) --mppl $(MPPL) \
+	  $(PY) -m dse.paper_caches --scene $$s --tris "$$T" --rays $$G/rays.npy $$( [ -z "$(PAPER_TUS)" ] || echo --tus-rays $$GT/rays.npy) --out $$d --java '$(JAVA)' --m $(or $(M),4) --mppl $(or $(MPPL),4) \
 	    --tus-list "$(PAPER_TUS)" --nocache-csv build/paper-nocache/$$n/tus_sweep.csv || exit $$?; \
 	  f11="$$f11 $$d/fig11_miss_rate.csv"; f89="$$f89 $$d/fig8_9_bytes_per_ray.csv"; \
 	  [ -z "$(PAPER_TUS)" ] || tus="$$tus $$d/tus_sweep.csv $$( [ -f build/paper-nocache/$$n/tus_sweep.csv ] && echo build/paper-nocache/$$n/tus_sweep.csv)"; done; \

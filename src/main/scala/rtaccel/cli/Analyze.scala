@@ -4,7 +4,7 @@ import rtaccel.model.Analysis
 
 /** make analyze: bandwidth vs MPPL (Fig 4) and accesses by level (Figs 5-6) as CSV in OUT. */
 object Analyze {
-  def main(args: Array[String]): Unit = Cli.run(args) { a =>
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.analyze) { a =>
     val out = a.path("out")
     val (scene, rays, _) = Cli.inputs(a)
     val base = Cli.params(a)
@@ -14,11 +14,12 @@ object Analyze {
     val results = mppls.map { k =>
       val p = base.copy(mppl = k)
       System.err.println(s"[analyze] MPPL=$k: building and tracing ${rays.count} rays")
-      val (bvh, c) = Analysis.run(scene, p, rays)
-      (k, bvh, c, Analysis.mpplRow(p, rays, bvh, c))
+      val b = Cli.build(scene, p, a) // CONFIG=<preset> is checked against the scene, CONFIG=fit fitted
+      val c = Analysis.run(b.scene, b.bvh, b.params, rays)
+      (k, b.bvh, c, Analysis.mpplRow(b.params, rays, b.bvh, c))
     }
     val (_, lbvh, lc, _) = results.find(_._1 == levelMppl).getOrElse {
-      val r = Analysis.run(scene, base, rays); (levelMppl, r._1, r._2, null)
+      val b = Cli.build(scene, base, a); (levelMppl, b.bvh, Analysis.run(b.scene, b.bvh, b.params, rays), null)
     }
     val prov = s"# scene=$label triangles=${scene.triangles} config=${base.name} M=${base.m} rays=${rays.count} " +
       s"node_access_bytes=${base.nodeAccessBytes} prim_access_bytes=${base.primAccessBytes} rtaccel=${Cli.version}\n"

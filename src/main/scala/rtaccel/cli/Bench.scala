@@ -7,22 +7,22 @@ import rtaccel.model.Traversal
 object Bench {
   private def median(xs: Seq[Double]): Double = { val s = xs.sorted; s(s.length / 2) }
 
-  def main(args: Array[String]): Unit = Cli.run(args) { a =>
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.bench) { a =>
     val (scene, rays, _) = Cli.inputs(a)
     val p = Cli.params(a)
     val repeat = a.int("repeat", 5)
     val builds = (0 until repeat).map { _ =>
       val t0 = System.nanoTime(); val bvh = Mbvh.build(scene, p); ((System.nanoTime() - t0) / 1e9, bvh)
     }
-    val bvh = builds.last._2
-    val tr = new Traversal(MemoryImage.pack(bvh, scene, rtaccel.config.Fit.fitTo(p, bvh)))
+    val b = Cli.build(scene, p, a) // the configuration CONFIG names, fitted or checked
+    val tr = new Traversal(MemoryImage.pack(b.bvh, b.scene, b.params))
     tr.traceAll(rays) // JIT warm-up, not timed
     val traces = (0 until repeat).map { _ =>
       val t0 = System.nanoTime(); tr.traceAll(rays); (System.nanoTime() - t0) / 1e9
     }
     println(ujson.write(ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rays" -> rays.count, "triangles" -> scene.triangles,
-      "m" -> p.m, "mppl" -> p.mppl, "repeat" -> repeat, "threads" -> 1,
+      "config" -> b.params.name, "m" -> p.m, "mppl" -> p.mppl, "repeat" -> repeat, "threads" -> 1,
       "model_build_s_median" -> median(builds.map(_._1)),
       "model_rays_per_s_median" -> rays.count / median(traces), "rtaccel" -> Cli.version)))
   }

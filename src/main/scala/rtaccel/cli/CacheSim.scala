@@ -13,14 +13,13 @@ import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
   * entries on the same access stream, written as CSV.
   */
 object CacheSim {
-  def main(args: Array[String]): Unit = Cli.run(args)(main0)
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.cacheSim)(main0)
 
   def main0(a: Args): Unit = {
-    val tus = a.int("tus", 1)
-    if (tus < 1 || tus > 1024) throw new InputError(s"TUS must be in 1..1024 (got $tus)")
     val p0 = Cli.params(a) // refuses bad cache values before the scene is loaded
+    val tus = p0.tus // the preset's TUs unless TUS= is given (paper2017: 32); TUS=1 replays one TU's order
     val (scene, rays, _) = Cli.inputs(a)
-    val b = Cli.build(scene, p0, Cli.fitRequested(a))
+    val b = Cli.build(scene, p0, a)
     val p = b.params
     val (node, prim) = (p.nodeCache, p.primCache)
     CacheSink(p) // validate geometry before the traversal runs

@@ -11,9 +11,10 @@ object Cli {
   val version: String = sys.props.getOrElse("rtaccel.version", "0.1.0")
 
   /** Runs a command body; user errors become one `error:` line and status 2 (returned for tests). */
-  def status(args: Array[String])(body: Args => Unit): Int =
-    try { body(Args.parse(args)); 0 }
+  def status(args: Array[String], flags: Seq[Flags.Flag])(body: Args => Unit): Int =
+    try { body(Flags.parse(args, flags)); 0 }
     catch {
+      case e: CheckFailed => Console.err.println(s"error: check failed: ${e.failures.mkString(", ")}"); 3
       case e: InputError => Console.err.println(s"error: ${e.getMessage}"); 2
       case e: IllegalArgumentException =>
         Console.err.println(s"error: ${e.getMessage.stripPrefix("requirement failed: ")}")
@@ -23,13 +24,16 @@ object Cli {
     finally System.out.flush()
 
   /** `main` of an entry point: exits with the status when it is not 0. */
-  def run(args: Array[String])(body: Args => Unit): Unit = {
-    val code = status(args)(body)
+  def run(args: Array[String], flags: Seq[Flags.Flag])(body: Args => Unit): Unit = {
+    val code = status(args, flags)(body)
     if (code != 0) sys.exit(code)
   }
 
-  /** CONFIG=<preset> uses the preset's fixed widths and refuses scenes that exceed them; CONFIG=fit (default)
-    * starts from paper2017 and fits field widths and stack depth to the scene. M/MPPL/TUS override either.
+  /** A preset is the whole platform it names, caches included (paper2017: its 2^13-entry DM node cache);
+    * every flag given overrides one field (--node-cache 0 removes the cache). CONFIG=<preset> keeps the
+    * preset's fixed widths and refuses scenes that exceed them; CONFIG=fit (default) starts from paper2017
+    * and fits field widths and stack depth to the scene. An explicit --stack-depth (STACK=) is kept even
+    * below what the scene needs: rays that need more are flagged overflow (see Cli.build).
     */
   def params(a: Args): PlatformParams = {
     val cfg = a.get("config", "fit")
@@ -38,32 +42,49 @@ object Cli {
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth),
-      nodeCache = cacheArg(a, "node"), primCache = cacheArg(a, "prim"))
+      nodeCache = cacheArg(a, "node", base.nodeCache), primCache = cacheArg(a, "prim", base.primCache))
   }
 
-  /** NODE_CACHE/NODE_WAYS/NODE_POLICY (or PRIM_...) and MAX_LEVEL. Absent --<prefix>-cache means no cache:
-    * a preset's own cache (paper2017: 2^13 DM) is used only when asked for, so every command's default is
-    * the uncached platform. Policy default: dm for one way, lru otherwise.
+  /** NODE_CACHE/NODE_WAYS/NODE_POLICY (or PRIM_...) and MAX_LEVEL over the preset's cache `base`. Without
+    * a policy flag the preset's policy is kept, unless the preset had no cache or the ways make it
+    * meaningless (dm with several ways): then dm for one way, lru otherwise.
     */
-  def cacheArg(a: Args, prefix: String): CacheParams = {
-    val entries = a.int(s"$prefix-cache", 0)
+  def cacheArg(a: Args, prefix: String, base: CacheParams): CacheParams = {
+    val entries = a.int(s"$prefix-cache", base.entries)
     if (entries < 0) throw new InputError(s"--$prefix-cache must be >= 0 (got $entries)")
-    val ways = a.int(s"$prefix-ways", 1)
-    val pol = a.get(s"$prefix-policy", if (ways == 1) "dm" else "lru")
-    CacheParams(entries = entries, ways = ways, policy = pol, maxLevel = a.int("max-level", 15))
+    val ways = a.int(s"$prefix-ways", base.ways)
+    val inherited = base.entries > 0 && !(base.policy == "dm" && ways > 1)
+    val pol = a.get(s"$prefix-policy", if (inherited) base.policy else if (ways == 1) "dm" else "lru")
+    CacheParams(entries = entries, ways = ways, policy = pol, maxLevel = a.int("max-level", base.maxLevel))
   }
 
   final case class Built(scene: Scene, params: PlatformParams, bvh: Mbvh, buildSeconds: Double)
 
-  def build(scene: Scene, p0: PlatformParams, fit: Boolean): Built = {
+  /** Builds the tree and fits (or checks) the configuration. `stack` = an explicit STACK=, kept as given:
+    * below the scene's bound it is a warning, not a refusal, so that overflow can be provoked and tested.
+    */
+  def build(scene: Scene, p0: PlatformParams, fit: Boolean, stack: Option[Int] = None): Built = {
     val t0 = System.nanoTime()
     val bvh = Mbvh.build(scene, p0)
     val secs = (System.nanoTime() - t0) / 1e9
-    val p = if (fit) Fit.fitTo(p0, bvh) else { Fit.check(p0, bvh, scene.name); p0 }
+    val need = Fit.needs(bvh).stackDepth
+    val p = stack match {
+      case Some(s) =>
+        val q = (if (fit) Fit.fitTo(p0, bvh) else p0).copy(stackDepth = s)
+        if (!fit) Fit.check(q.copy(stackDepth = math.max(s, need)), bvh, scene.name)
+        if (s < need) Console.err.println(s"[warn] STACK=$s is below the $need entries this tree can need: rays that " +
+          "need more are flagged overflow (prim -3)")
+        q
+      case None => if (fit) Fit.fitTo(p0, bvh) else { Fit.check(p0, bvh, scene.name); p0 }
+    }
     Built(scene, p, bvh, secs)
   }
 
+  /** build() with CONFIG and STACK as the command line gives them. */
+  def build(scene: Scene, p0: PlatformParams, a: Args): Built = build(scene, p0, fitRequested(a), stackArg(a))
+
   def fitRequested(a: Args): Boolean = a.get("config", "fit") == "fit"
+  def stackArg(a: Args): Option[Int] = a.opt("stack-depth").map(_ => a.int("stack-depth", 0))
 
   /** The scene and rays as the host driver uploads them: scaled by one power of two (see Normalize). */
   def inputs(a: Args): (Scene, Rays, Int) = {
@@ -86,10 +107,5 @@ final case class Args(kv: Map[String, String]) {
     throw new InputError(s"--$k must be an integer (got '$v')"))).getOrElse(default)
 }
 
-object Args {
-  def parse(a: Array[String]): Args = {
-    if (a.length % 2 != 0 || a.grouped(2).exists(p => !p(0).startsWith("--")))
-      throw new InputError(s"arguments must be --key value pairs (got ${a.mkString(" ")})")
-    Args(a.grouped(2).map(p => p(0).stripPrefix("--") -> p(1)).toMap)
-  }
-}
+/** A check of a run that completed failed (exit status 3); the run's outputs and JSON are already written. */
+final class CheckFailed(val failures: Seq[String]) extends Exception(failures.mkString(", "))

@@ -8,7 +8,7 @@ import rtaccel.top.RtAccelTop
   * file per module under OUT, through firtool.
   */
 object EmitVerilog {
-  def main(args: Array[String]): Unit = Cli.run(args)(main0)
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.verilog)(main0)
 
   def main0(a: Args): Unit = {
     val cfg = a.need("config")

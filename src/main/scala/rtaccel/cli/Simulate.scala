@@ -20,17 +20,32 @@ import rtaccel.top.{RegMap, RtAccelTop}
   * model; writes OUT/hits.npy and prints the metrics JSON as the last line.
   */
 object Simulate {
-  def main(args: Array[String]): Unit = Cli.run(args)(main0)
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.simulate)(main0)
 
-  final case class Outcome(json: ujson.Obj, hits: Hits)
+  final case class Outcome(json: ujson.Obj, hits: Hits) {
+    def failures: Seq[String] = json("failures").arr.map(_.str).toSeq
+    def ok: Boolean = json("ok").bool
+  }
 
+  /** Writes the hits and the summary, prints the JSON last line, and then fails with status 3 when a check
+    * failed: the outputs stay for inspection, the exit status tells scripts not to use them as results.
+    */
   def main0(a: Args): Unit = {
     val out = a.path("out")
     val o = run(a)
     o.hits.save(out.resolve("hits.npy"))
     Cli.writeText(out.resolve("summary.json"), ujson.write(o.json, indent = 2) + "\n")
     println(ujson.write(o.json))
+    if (!o.ok) throw new CheckFailed(o.failures)
   }
+
+  /** The checks of one run, each by the name it has in the JSON (README: "Checks are exit statuses"). */
+  def failures(j: ujson.Obj): Seq[String] = Seq(
+    "mismatch_vs_model" -> (j("mismatch_vs_model").num > 0), "lost" -> (j("lost").num > 0),
+    "duplicated" -> (j("duplicated").num > 0), "timeout" -> j("timed_out").bool,
+    "overflow_vs_model" -> (j("overflow_disagreements").num > 0),
+    // null when there is no cache to compare
+    "cache_counts_match_model" -> (j("cache_counts_match_model") == ujson.False)).collect { case (n, true) => n }
 
   /** Options of one run that do not change the platform. */
   final case class SimOptions(label: String, memJitter: Int = 0, hostStall: Int = 0, seed: Int = 1,
@@ -38,7 +53,7 @@ object Simulate {
 
   def run(a: Args): Outcome = {
     val (scene, rays, scaleExp) = Cli.inputs(a)
-    val b = Cli.build(scene, Cli.params(a), Cli.fitRequested(a))
+    val b = Cli.build(scene, Cli.params(a), a)
     run(b, rays, SimOptions(a.get("scene-label", a.need("tris")), a.int("mem-jitter", 0), a.int("host-stall", 0),
       a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp))
   }
@@ -106,7 +121,7 @@ object Simulate {
       // results, by ray id
       val hits = Hits.empty(rays.count)
       val seen = new Array[Int](rays.count)
-      var overflow = 0
+      val rtlOverflow = new Array[Boolean](rays.count)
       for (k <- 0 until math.min(received, rays.count.toLong).toInt) {
         dut.io.readIdx.poke(k.U)
         val w = dut.io.readData.peek().litValue
@@ -116,13 +131,14 @@ object Simulate {
           seen(id) += 1
           hits.t(id) = java.lang.Float.intBitsToFloat(word(1)); hits.prim(id) = word(2)
           hits.u(id) = java.lang.Float.intBitsToFloat(word(3)); hits.v(id) = java.lang.Float.intBitsToFloat(word(4))
-          if ((word(5) & 1) != 0) overflow += 1
+          if ((word(5) & 1) != 0) rtlOverflow(id) = true
         }
       }
       def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
       val mismatch = (0 until rays.count).count(i => seen(i) >= 1 && (hits.prim(i) != model.prim(i) ||
         bits(hits.t(i)) != bits(model.t(i)) || bits(hits.u(i)) != bits(model.u(i)) || bits(hits.v(i)) != bits(model.v(i))))
       val lost = seen.count(_ == 0)
+      val overflowDisagree = (0 until rays.count).count(i => seen(i) >= 1 && rtlOverflow(i) != (model.prim(i) == Hits.Overflow))
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
       // and against the model's N-TU interleaved order (the fast model's prediction)
       val logged = if (!cached) Array.empty[Int] else {
@@ -143,7 +159,9 @@ object Simulate {
         "mem_utilisation" -> counters("mem_busy_beats") * axi.beatBytes / (math.max(1, cycles) * peakBytesPerCycle),
         "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall,
         "scene" -> label, "config" -> p.name, "tus" -> p.tus, "m" -> p.m, "mppl" -> p.mppl,
-        "stack_overflow_rays" -> overflow, "model_stack_overflow_rays" -> stats.overflows,
+        "stack_depth" -> p.stackDepth, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
+        "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
+        "overflow_disagreements" -> overflowDisagree, "read_errors" -> hits.prim.count(_ == Hits.ReadError),
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
         "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,
         "timed_out" -> (received < rays.count), "normalize_exponent" -> o.scaleExp,
@@ -152,6 +170,8 @@ object Simulate {
         "dram_bytes_per_ray" -> counters("mem_busy_beats") * axi.beatBytes / n,
         "node_cache" -> cacheJson.node, "prim_cache" -> cacheJson.prim, "cache_counts_match_model" -> cacheJson.matches,
         "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> Cli.version)
+      val failed = failures(json)
+      json("ok") = failed.isEmpty; json("failures") = ujson.Arr.from(failed.map(ujson.Str(_)))
       result = Outcome(json, hits)
     }
     if (result == null) throw new InputError("simulation did not complete")

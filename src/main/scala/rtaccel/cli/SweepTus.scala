@@ -17,7 +17,7 @@ object SweepTus {
     if (!o.contains("miss_rate")) "" else if (key == "miss_rate") f"${o("miss_rate").num}%.5f" else f"${o(key)("miss_rate").num}%.5f"
   }
 
-  def main(args: Array[String]): Unit = Cli.run(args) { a =>
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.sweepTus) { a =>
     val out = a.path("out")
     val (scene, rays, e) = Cli.inputs(a)
     val tusList = a.get("tus-list", "1,2,4,8,16,32").split(",").map(s => s.trim.toIntOption.getOrElse(
@@ -25,12 +25,12 @@ object SweepTus {
     val base = Cli.params(a)
     val label = a.get("scene-label", a.need("tris"))
     val rows = tusList.map { t =>
-      val b = Cli.build(scene, base.copy(tus = t), Cli.fitRequested(a))
+      val b = Cli.build(scene, base.copy(tus = t), a)
       System.err.println(s"[sweep] $label: TUs=$t")
-      val j = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e)).json
-      if (j("mismatch_vs_model").num != 0 || j("lost").num != 0 || j("timed_out").bool)
-        throw new InputError(s"TUs=$t: the RTL disagrees with the model or did not finish: ${ujson.write(j)}")
-      j
+      val o = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e))
+      // a failed point stops the sweep before any CSV exists, so nothing downstream plots it
+      if (!o.ok) { println(ujson.write(o.json)); throw new CheckFailed(o.failures.map(f => s"TUS=$t $f")) }
+      o.json
     }
     val p = base
     val sb = new StringBuilder(s"# scene=$label triangles=${scene.triangles} rays=${rays.count} config=${p.name} M=${p.m} " +

@@ -6,12 +6,12 @@ import rtaccel.model.{AccessRecorder, RayStats, Traversal}
 
 /** make trace: the reference model on a rays file -> OUT/hits.npy, OUT/trace.npy, OUT/summary.json. */
 object Trace {
-  def main(args: Array[String]): Unit = Cli.run(args)(main0)
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.trace)(main0)
 
   def main0(a: Args): Unit = {
     val out = a.path("out")
     val (scene, rays, scaleExp) = Cli.inputs(a)
-    val b = Cli.build(scene, Cli.params(a), Cli.fitRequested(a))
+    val b = Cli.build(scene, Cli.params(a), a)
     val img = MemoryImage.pack(b.bvh, b.scene, b.params)
     val rec = new AccessRecorder; val st = new RayStats
     val t0 = System.nanoTime()
@@ -29,7 +29,7 @@ object Trace {
       "node_fetches" -> st.nodeFetches.toDouble, "leaf_fetches" -> st.leafFetches.toDouble, "prim_tests" -> st.primTests.toDouble,
       "node_bytes_per_ray" -> st.nodeFetches * p.nodeAccessBytes / n,
       "prim_bytes_per_ray" -> st.primTests * p.primAccessBytes / n,
-      "max_stack" -> st.maxStack, "stack_overflow_rays" -> st.overflows,
+      "max_stack" -> st.maxStack, "stack_overflow_rays" -> st.overflows, "overflowed" -> st.overflows,
       "build_s" -> b.buildSeconds, "trace_s" -> secs, "rays_per_s" -> rays.count / math.max(secs, 1e-9))
     // Outputs are complete in memory before the first file is written.
     hits.save(out.resolve("hits.npy"))

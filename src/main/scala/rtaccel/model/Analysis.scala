@@ -25,11 +25,11 @@ object Analysis {
   final case class LevelRow(level: Int, nodes: Int, accesses: Long, accessesPerNode: Double,
                             cumNodeShare: Double, cumAccessShare: Double)
 
-  def run(scene: Scene, p: PlatformParams, rays: Rays): (Mbvh, LevelCounter) = {
-    val bvh = Mbvh.build(scene, p)
+  /** Counts the accesses of `rays` over `bvh`, packed for `p` (already fitted to or checked against it). */
+  def run(scene: Scene, bvh: Mbvh, p: PlatformParams, rays: Rays): LevelCounter = {
     val counter = new LevelCounter(bvh.maxLevel)
-    new Traversal(MemoryImage.pack(bvh, scene, rtaccel.config.Fit.fitTo(p, bvh))).traceAll(rays, counter)
-    (bvh, counter)
+    new Traversal(MemoryImage.pack(bvh, scene, p)).traceAll(rays, counter)
+    counter
   }
 
   def mpplRow(p: PlatformParams, rays: Rays, bvh: Mbvh, c: LevelCounter): MpplRow = MpplRow(

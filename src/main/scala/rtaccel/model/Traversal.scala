@@ -18,14 +18,17 @@ final class RayStats {
   *  - leaf: fetch its primitives and test them in slot order; a hit with t < tmax becomes the closest hit
   *    (ties keep the earlier one);
   *  - pop: discard an entry whose entry distance exceeds tmax; done when the stack is empty.
-  * A push beyond params.stackDepth marks the ray as overflowed (the model carries on so the result stays
-  * usable for analysis; hardware reports the overflow).
+  * Stack overflow, the one semantic shared with the TU (docs/architecture.md): a push onto a full stack
+  * (params.stackDepth entries) is dropped, the ray is flagged and traversal carries on, so that the
+  * accesses stay identical to the hardware's; the flagged ray's hit record is `Hits.Overflow` (prim -3,
+  * t = +inf, u = v = 0), never a plausible wrong hit.
   */
 final class Traversal(img: MemoryImage) {
   private val p = img.p
   private val m = p.m
   private val codec = img.codec
-  private var sRef = new Array[Int](64); private var sT = new Array[Float](64); private var sLvl = new Array[Int](64)
+  private val sRef = new Array[Int](p.stackDepth); private val sT = new Array[Float](p.stackDepth)
+  private val sLvl = new Array[Int](p.stackDepth)
   private val cRef = new Array[Int](m); private val cT = new Array[Float](m)
   private val tri = new RayTriangle.Result
   private var slot = 0
@@ -65,11 +68,11 @@ final class Traversal(img: MemoryImage) {
         }
         var q = k - 1
         while (q >= 1) {
-          if (sp == sRef.length) grow()
-          sRef(sp) = cRef(q); sT(sp) = cT(q); sLvl(sp) = curLevel + 1; sp += 1; q -= 1
+          if (sp == sRef.length) overflowed = true // dropped, as the TU drops it
+          else { sRef(sp) = cRef(q); sT(sp) = cT(q); sLvl(sp) = curLevel + 1; sp += 1 }
+          q -= 1
         }
         if (sp > st.maxStack) st.maxStack = sp
-        if (sp > p.stackDepth) overflowed = true
         if (k > 0) { cur = cRef(0); curLevel += 1 } else hasCur = false
       } else {
         val first = codec.firstPrim(cur); val n = codec.count(cur)
@@ -89,14 +92,9 @@ final class Traversal(img: MemoryImage) {
         if (!(sT(sp) > tmax)) { cur = sRef(sp); curLevel = sLvl(sp); hasCur = true }
       }
     }
-    if (overflowed) st.overflows += 1
-    if (bestPrim >= 0) { out.t(i) = tmax; out.prim(i) = bestPrim; out.u(i) = bestU; out.v(i) = bestV }
+    if (overflowed) { st.overflows += 1; out.t(i) = Float.PositiveInfinity; out.prim(i) = Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f }
+    else if (bestPrim >= 0) { out.t(i) = tmax; out.prim(i) = bestPrim; out.u(i) = bestU; out.v(i) = bestV }
   }
 
   @inline private def box(id: Int, j: Int, q: Int): Float = java.lang.Float.intBitsToFloat(img.childWord(id, j, q))
-
-  private def grow(): Unit = {
-    sRef = java.util.Arrays.copyOf(sRef, sRef.length * 2); sT = java.util.Arrays.copyOf(sT, sT.length * 2)
-    sLvl = java.util.Arrays.copyOf(sLvl, sLvl.length * 2)
-  }
 }

@@ -62,6 +62,21 @@ final case class Hits(t: Array[Float], prim: Array[Int], u: Array[Float], v: Arr
 }
 
 object Hits {
+  /** Hit-record codes of a ray that has no valid result (hits.npy keeps its dtype; t = +inf). */
+  val Miss: Int = -1
+  val ReadError: Int = -2
+  val Overflow: Int = -3
+
+  /** hits.npy as Hits.save writes it (and make golden). */
+  def load(path: java.nio.file.Path): Hits = {
+    val a = rtaccel.io.Npy.read(path)
+    if (!a.descr.contains("'t'") || !a.descr.contains("'prim'") || a.shape.length != 1)
+      throw new rtaccel.io.InputError(s"$path: not a hits file (want dtype [t f4, prim i4, u f4, v f4], got ${a.descr})")
+    val h = empty(a.count); val bb = a.data
+    for (i <- 0 until a.count) { h.t(i) = bb.getFloat(16 * i); h.prim(i) = bb.getInt(16 * i + 4); h.u(i) = bb.getFloat(16 * i + 8); h.v(i) = bb.getFloat(16 * i + 12) }
+    h
+  }
+
   def empty(n: Int): Hits =
     Hits(Array.fill(n)(Float.PositiveInfinity), Array.fill(n)(-1), new Array[Float](n), new Array[Float](n))
 }

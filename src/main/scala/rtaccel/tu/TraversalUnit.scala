@@ -28,7 +28,9 @@ class TuResult extends Bundle {
   * issue the current ref to the IU; for a node, rank the hit children by entry distance (stable by slot),
   * descend into the nearest and push the others far-first; for a leaf, keep the closest hit (t < tmax);
   * then pop, discarding entries whose entry distance is beyond tmax.
-  * A push onto a full stack is dropped and the ray is flagged `overflow` (reported, never silently wrong).
+  * A push onto a full stack is dropped, the ray is flagged `overflow` and traversal carries on (the same
+  * accesses as the model); its result is the overflow record (prim -3, t = +inf, u = v = 0), never a
+  * plausible wrong hit.
   */
 class TraversalUnit(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
@@ -120,5 +122,9 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.result.valid := state === S.done
   io.result.bits := best
   io.result.bits.overflow := overflow
+  when(overflow) {
+    io.result.bits.t := inf; io.result.bits.prim := (rtaccel.scene.Hits.Overflow & 0xffffffffL).U(32.W)
+    io.result.bits.u := 0.U; io.result.bits.v := 0.U
+  }
   when(io.result.fire) { state := S.idle }
 }

@@ -12,7 +12,7 @@ class CacheSimSpec extends AnyFunSuite {
   private def sim(extra: String*): (Int, String, String) = {
     val out = new java.io.ByteArrayOutputStream(); val err = new java.io.ByteArrayOutputStream()
     val code = Console.withOut(out)(Console.withErr(err)(
-      Cli.status(Array("--tris", tris.toString, "--rays", raysPath.toString) ++ extra)(a => CacheSim.main0(a))))
+      Cli.status(Array("--tris", tris.toString, "--rays", raysPath.toString) ++ extra, Flags.cacheSim)(a => CacheSim.main0(a))))
     (code, out.toString, err.toString)
   }
 
@@ -26,10 +26,23 @@ class CacheSimSpec extends AnyFunSuite {
     assert(j("node_cache")("hits").num + j("node_cache")("misses").num == j("node_accesses").num)
     assert(j("node_bytes_per_ray").num < j("node_bytes_per_ray_nocache").num)
     assert(j("prim_bytes_per_ray").num <= j("prim_bytes_per_ray_nocache").num)
-    val (c0, out0, _) = sim()
+    val (c0, out0, _) = sim("--node-cache", "0")
     val j0 = ujson.read(out0.trim.linesIterator.toSeq.last)
-    assert(c0 == 0 && j0("node_cache")("hits").num == 0 && j0("prim_cache")("misses").num == 0)
-    assert(j0("node_bytes_per_ray").num == j0("node_bytes_per_ray_nocache").num)
+    assert(c0 == 0 && j0("node_cache")("entries").num == 0 && j0("prim_cache")("entries").num == 0)
+    assert(j0("node_bytes_per_ray").num == j0("node_bytes_per_ray_nocache").num && j0("node_bytes_per_ray").num > 0)
+  }
+
+  test("a preset is the whole platform: CONFIG=fit and paper2017 bring the paper's 2^13 DM node cache and 32 TUs") {
+    for (cfg <- Seq("fit", "paper2017")) {
+      val (code, out, err) = sim("--config", cfg)
+      assert(code == 0, err)
+      val j = ujson.read(out.trim.linesIterator.toSeq.last)
+      assert(j("node_cache")("entries").num == 8192 && j("node_cache")("policy").str == "dm" && j("tus").num == 32, cfg)
+      assert(j("node_cache")("hits").num > 0 && j("node_bytes_per_ray").num < j("node_bytes_per_ray_nocache").num, cfg)
+    }
+    val (_, out, _) = sim("--config", "paper2017-lrp", "--tus", "2")
+    val j = ujson.read(out.trim.linesIterator.toSeq.last)
+    assert(j("node_cache")("policy").str == "lrp" && j("node_cache")("entries").num == 8192 && j("tus").num == 2)
   }
 
   test("bad cache values: one error line, status 2") {

@@ -3,6 +3,7 @@ package rtaccel.cli
 import java.nio.file.{Files, Path}
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
+import rtaccel.scene.Hits
 
 class CliSpec extends AnyFunSuite {
   private val dir = Files.createTempDirectory("clispec")
@@ -10,8 +11,19 @@ class CliSpec extends AnyFunSuite {
   private val scene = TestScenes.soup(2, 300)
   private val rays = TestScenes.rays(3, 100)
   private val (tris, raysPath) = TestScenes.writeInputs(dir, scene, rays)
-  private def trace(out: Path, extra: String*) =
-    Cli.status(Array("--tris", tris.toString, "--rays", raysPath.toString, "--out", out.toString) ++ extra)(a => Trace.main0(a))
+  /** A valid trace call with `extra` replacing or adding flags (a flag may be given only once). */
+  private def argv(out: Path, extra: Seq[String]): Array[String] = {
+    val base = Seq("--tris" -> tris.toString, "--rays" -> raysPath.toString, "--out" -> out.toString)
+    val over = extra.grouped(2).collect { case Seq(k, v) => k -> v }.toSeq
+    (base.filterNot(b => over.exists(_._1 == b._1)) ++ over).flatMap { case (k, v) => Seq(k, v) }.toArray ++
+      (if (extra.length % 2 == 1) Array(extra.last) else Array.empty[String])
+  }
+  private def captured(args: Array[String], flags: Seq[Flags.Flag] = Flags.trace)(body: Args => Unit): (Int, String, String) = {
+    val out = new java.io.ByteArrayOutputStream(); val err = new java.io.ByteArrayOutputStream()
+    val code = Console.withOut(out)(Console.withErr(err)(Cli.status(args, flags)(body)))
+    (code, out.toString, err.toString)
+  }
+  private def trace(out: Path, extra: String*) = captured(argv(out, extra))(a => Trace.main0(a))._1
 
   test("trace writes hits, access trace and summary") {
     val out = dir.resolve("ok")
@@ -28,25 +40,48 @@ class CliSpec extends AnyFunSuite {
       "missing scene" -> Seq("--tris", dir.resolve("nope.npy").toString),
       "MPPL over the count field" -> Seq("--mppl", "32"),
       "M not 2/4/8" -> Seq("--m", "5"),
-      "scene over a preset" -> Seq("--config", "paper2017", "--stack-depth", "2"),
       "unknown preset" -> Seq("--config", "nonexistent"),
-      "odd argument list" -> Seq("--m")
+      "odd argument list" -> Seq("--m"),
+      "misspelled flag" -> Seq("--node-cahce", "64"),
+      "flag of another command" -> Seq("--mem-jitter", "3"),
+      "not an integer" -> Seq("--tus", "many")
     )) {
       val out = dir.resolve(name.replace(' ', '_'))
-      // later keys win, so each case overrides one argument of a valid call
-      val argv = Array("--tris", tris.toString, "--rays", raysPath.toString, "--out", out.toString) ++ args
-      assert(Cli.status(argv)(a => Trace.main0(a)) == 2, name)
-      assert(!Files.exists(out), s"$name left files in OUT")
+      val (code, stdout, err) = captured(argv(out, args))(a => Trace.main0(a))
+      assert(code == 2, name)
+      assert(err.trim.linesIterator.toSeq.length == 1 && err.startsWith("error: "), s"$name: $err")
+      assert(stdout.isEmpty && !Files.exists(out), s"$name left output")
     }
   }
 
+  test("a misspelled flag names the nearest valid one; a repeated flag is refused") {
+    val (c1, _, e1) = captured(Array("--tris", tris.toString, "--rays", raysPath.toString, "--node-cahce", "64"), Flags.cacheSim)(CacheSim.main0)
+    assert(c1 == 2 && e1.contains("--node-cahce") && e1.contains("did you mean --node-cache?"), e1)
+    val (c2, _, e2) = captured(argv(dir.resolve("twice"), Nil) ++ Array("--tus", "2", "--tus", "4"))(Trace.main0)
+    assert(c2 == 2 && e2.contains("--tus") && e2.contains("more than once"), e2)
+    assert(Flags.nearest("stak-depth", Flags.trace) == "stack-depth" && Flags.distance("kitten", "sitting") == 3)
+  }
+
   test("a fixed preset refuses a scene that exceeds it; the fitted default accepts it") {
-    val out = dir.resolve("refused")
     assert(trace(dir.resolve("fits"), "--config", "paper2017", "--m", "8", "--mppl", "1") == 0, "paper2017 holds a small scene")
-    val err = new java.io.ByteArrayOutputStream()
-    val code = Console.withErr(err)(trace(out, "--config", "paper2017", "--stack-depth", "2"))
-    assert(code == 2 && !Files.exists(out))
-    assert(err.toString.contains("traversal stack needs") && err.toString.contains("has 2 entries"), err.toString)
-    assert(trace(dir.resolve("fit"), "--stack-depth", "2") == 0, "CONFIG=fit sizes the stack to the scene")
+    val narrow = rtaccel.config.Presets.small.copy(refs = rtaccel.config.RefFormat(4, 4, 2, 0))
+    val bvh = rtaccel.bvh.Mbvh.build(scene, narrow)
+    val e = intercept[rtaccel.io.InputError](rtaccel.config.Fit.check(narrow, bvh, "soup"))
+    assert(e.getMessage.contains("node id field needs") && e.getMessage.contains("4 bits"), e.getMessage)
+  }
+
+  test("STACK below the scene's bound is kept: overflowed rays get the overflow record, the others are unchanged") {
+    val deep = dir.resolve("deep"); val shallow = dir.resolve("shallow")
+    val (c0, _, _) = captured(argv(deep, Seq("--m", "8", "--mppl", "1")))(Trace.main0)
+    val (c1, _, err) = captured(argv(shallow, Seq("--m", "8", "--mppl", "1", "--stack-depth", "2")))(Trace.main0)
+    assert(c0 == 0 && c1 == 0 && err.contains("[warn] STACK=2"), err)
+    val s = ujson.read(Files.readString(shallow.resolve("summary.json")))
+    assert(s("stack_depth").num == 2 && s("overflowed").num > 0 && s("max_stack").num <= 2)
+    val h0 = Hits.load(deep.resolve("hits.npy")); val h1 = Hits.load(shallow.resolve("hits.npy"))
+    val flagged = (0 until h1.count).filter(i => h1.prim(i) == Hits.Overflow)
+    assert(flagged.length == s("overflowed").num.toInt)
+    for (i <- flagged) assert(h1.t(i).isPosInfinity && h1.u(i) == 0f && h1.v(i) == 0f)
+    for (i <- 0 until h1.count if h1.prim(i) != Hits.Overflow)
+      assert(h0.prim(i) == h1.prim(i) && java.lang.Float.floatToRawIntBits(h0.t(i)) == java.lang.Float.floatToRawIntBits(h1.t(i)), s"ray $i")
   }
 }

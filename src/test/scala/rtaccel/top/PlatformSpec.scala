@@ -32,18 +32,19 @@ class PlatformSpec extends AnyFunSuite {
   }
 
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
-                     node: CacheParams = CacheParams(), prim: CacheParams = CacheParams()) = {
+                     node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (Set("lrp", "hybrid")(node.policy) && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
-    val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = 64, nodeCache = node, primCache = prim)
-    val b = Cli.build(scene, p, fit = false)
+    val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim)
+    val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall))
     val j = o.json
     info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +
       f"mismatch ${j("mismatch_vs_model").num}%.0f lost ${j("lost").num}%.0f dup ${j("duplicated").num}%.0f")
     assert(j("timed_out").bool == false, "the platform did not finish")
     assert(j("mismatch_vs_model").num == 0 && j("lost").num == 0 && j("duplicated").num == 0, ujson.write(j))
-    assert(j("stack_overflow_rays").num == j("model_stack_overflow_rays").num)
+    assert(j("overflowed").num == j("model_overflowed").num && j("overflow_disagreements").num == 0)
+    assert(j("ok").bool && j("failures").arr.isEmpty, ujson.write(j))
     assert(j("node_requests").num == j("model_node_fetches").num, "the RTL fetched a different number of nodes")
     assert(j("prim_requests").num == j("model_prim_tests").num, "the RTL fetched a different number of primitives")
     if (node.entries > 0 || prim.entries > 0) {
@@ -52,7 +53,7 @@ class PlatformSpec extends AnyFunSuite {
         info(f"$k ${c.entries} x${c.ways} ${c.policy}: hits ${j(k)("hits").num}%.0f misses ${j(k)("misses").num}%.0f bypasses ${j(k)("bypasses").num}%.0f")
         assert(j(k)("hits").num > 0 && j(k)("misses").num > 0, s"$k: a test cache must both hit and miss")
       }
-    } else assert(j("node_cache")("hits").num == 0 && j("prim_cache")("misses").num == 0)
+    } else assert(j("node_cache")("entries").num == 0 && j("prim_cache")("entries").num == 0, "an uncached run must build no cache")
     j
   }
 
@@ -74,6 +75,12 @@ class PlatformSpec extends AnyFunSuite {
     test(s"caches, bit-exact and counting like the model: $what") {
       runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim)
     }
+
+  test("a stack too small for the scene: the RTL flags exactly the model's overflowed rays, bit for bit") {
+    val j = runOne(2, 8, 1, rays, scene, stack = 2)
+    info(s"${j("overflowed").num.toInt} of ${rays.count} rays overflowed a 2-entry stack")
+    assert(j("model_overflowed").num > 0 && j("model_overflowed").num < rays.count, "the test stack must overflow some rays, not all")
+  }
 
   test("random memory latency and host backpressure change no result") {
     val quiet = runOne(4, 4, 4, rays, scene)

@@ -3,7 +3,7 @@ package rtaccel.top
 import java.nio.file.Files
 import org.scalatest.funsuite.AnyFunSuite
 import scala.sys.process._
-import rtaccel.cli.{Cli, EmitVerilog}
+import rtaccel.cli.{Cli, EmitVerilog, Flags}
 
 /** `make verilog` + `make lint` in miniature: the board top of several configurations is emitted and must
   * pass `verilator --lint-only -Wall` with only the written-down waivers of tools/lint.vlt.
@@ -19,7 +19,7 @@ class VerilogLintSpec extends AnyFunSuite {
       val out = Files.createTempDirectory(s"lint-$cfg")
       val args = Array("--config", cfg, "--m", m.toString, "--tus", tus.toString, "--out", out.toString) ++
         caches.split(" ").filter(_.nonEmpty)
-      assert(Cli.status(args)(a => EmitVerilog.main0(a)) == 0)
+      assert(Cli.status(args, Flags.verilog)(a => EmitVerilog.main0(a)) == 0)
       val files = Files.list(out).toArray.map(_.toString).filter(_.endsWith(".sv")).toSeq
       assert(files.exists(_.endsWith("RtAccelTop.sv")))
       val log = new StringBuilder

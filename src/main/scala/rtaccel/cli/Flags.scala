@@ -1,0 +1,78 @@
+package rtaccel.cli
+
+import rtaccel.io.InputError
+
+/** Every command-line flag of the entry points, declared once, and the sets each command accepts.
+  * Parsing is scopt's (unknown flags, repeated flags, missing values); values are validated where a
+  * command reads them (Args.int etc.), so a message can name the knob and its legal range.
+  * A flag that a command does not use is refused rather than ignored: a user who passes NODE_CACHE= to a
+  * command without caches must hear that it had no effect.
+  */
+object Flags {
+  final case class Flag(name: String, help: String)
+  private def f(name: String, help: String) = Flag(name, help)
+
+  val inputs: Seq[Flag] = Seq(
+    f("tris", "triangle file (N x 9 float32 .npy, from tools/tris)"),
+    f("rays", "rays.npy (N x 8 float32)"),
+    f("scene-label", "scene name recorded in outputs"))
+  /** Knobs of PlatformParams (Cli.params reads them; a preset's value is kept unless one is given). */
+  val model: Seq[Flag] = Seq(
+    f("config", "preset name or fit"), f("m", "MBVH width (2, 4, 8)"), f("mppl", "max primitives per leaf"),
+    f("tus", "traversal units"), f("stack-depth", "TU stack entries (STACK=)"),
+    f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"))
+  val cache: Seq[Flag] = Seq(
+    f("node-cache", "node cache entries (0 = none)"), f("node-ways", "node cache ways"),
+    f("node-policy", "node cache policy"), f("prim-cache", "primitive cache entries (0 = none)"),
+    f("prim-ways", "primitive cache ways"), f("prim-policy", "primitive cache policy"),
+    f("max-level", "MAX_LEVEL of the level replacement policy"))
+  val platform: Seq[Flag] = model ++ cache
+
+  val trace: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("access-trace", "1 writes trace.npy"))
+  val cacheSim: Seq[Flag] = inputs ++ platform ++ Seq(f("sweep-out", "miss-rate grid CSV"), f("repeat", "replays, median timed"))
+  val analyze: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("mppls", "MPPL list"))
+  val bench: Seq[Flag] = inputs ++ platform ++ Seq(f("repeat", "repeats, median reported"))
+  val simOptions: Seq[Flag] = Seq(f("mem-jitter", "random extra DRAM latency (cycles)"),
+    f("host-stall", "host backpressure percentage"), f("seed", "random seed of jitter and stalls"),
+    f("work", "simulator build folder"), f("max-cycles", "cycle limit (a run that reaches it timed out)"))
+  val simulate: Seq[Flag] = inputs ++ platform ++ simOptions :+ f("out", "output folder")
+  val sweepTus: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts"))
+  val verilog: Seq[Flag] = platform :+ f("out", "output folder")
+
+  /** Levenshtein distance, for the "did you mean" of a misspelled flag. */
+  def distance(a: String, b: String): Int = {
+    val d = Array.tabulate(a.length + 1, b.length + 1)((i, j) => if (i == 0) j else if (j == 0) i else 0)
+    for (i <- 1 to a.length; j <- 1 to b.length)
+      d(i)(j) = math.min(math.min(d(i - 1)(j) + 1, d(i)(j - 1) + 1), d(i - 1)(j - 1) + (if (a(i - 1) == b(j - 1)) 0 else 1))
+    d(a.length)(b.length)
+  }
+
+  def nearest(name: String, flags: Seq[Flag]): String = flags.map(_.name).minBy(n => (distance(name, n), n))
+
+  /** `--key value` pairs into Args; the first problem becomes one InputError naming the flag. */
+  def parse(argv: Array[String], flags: Seq[Flag]): Args = {
+    val builder = scopt.OParser.builder[Map[String, String]]
+    import builder._
+    val parser = scopt.OParser.sequence(programName("rtaccel"),
+      flags.map(fl => opt[String](fl.name).maxOccurs(1).action((v, m) => m + (fl.name -> v)).text(fl.help)): _*)
+    val setup = new scopt.DefaultOParserSetup { override def showUsageOnError: Option[Boolean] = Some(false) }
+    val (result, effects) = scopt.OParser.runParser(parser, argv.toSeq, Map.empty[String, String], setup)
+    val errors = effects.collect { case scopt.OEffect.ReportError(msg) => msg }
+    result match {
+      case Some(kv) if errors.isEmpty => Args(kv)
+      case _ => throw new InputError(explain(errors.headOption.getOrElse("bad arguments"), argv, flags))
+    }
+  }
+
+  private val UnknownOpt = """Unknown option --(.+)""".r
+  private val UnknownArg = """Unknown argument '(.*)'""".r
+  private def explain(msg: String, argv: Array[String], flags: Seq[Flag]): String = msg match {
+    case UnknownOpt(name) if flags.exists(_.name == name) =>
+      s"flag --$name is given more than once; give it once"
+    case UnknownOpt(name) =>
+      s"unknown flag --$name; did you mean --${nearest(name, flags)}?"
+    case UnknownArg(arg) => s"unexpected argument '$arg'; arguments are --flag value pairs"
+    case m if m.startsWith("Missing value") => s"${m.toLowerCase}: every flag takes a value"
+    case m => m
+  }
+}
