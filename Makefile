@@ -142,7 +142,8 @@ LINT_WAIVERS = tools/lint.vlt
 lint: verilog verilator
 	verilator --lint-only -Wall $(LINT_WAIVERS) --top-module RtAccelTop build/$(VCONFIG)/*.sv && echo "[lint] build/$(VCONFIG): verilator -Wall clean"
 
-SIM_ARGS = $(if $(MEM_JITTER),--mem-jitter $(MEM_JITTER)) $(if $(HOST_STALL),--host-stall $(HOST_STALL))
+SIM_ARGS = $(if $(MEM_JITTER),--mem-jitter $(MEM_JITTER)) $(if $(HOST_STALL),--host-stall $(HOST_STALL)) \
+  $(if $(MEM_ERROR_RATE),--mem-error-rate $(MEM_ERROR_RATE))
 simulate: deps
 	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
 	  OUT=$${OUT:-build/simulate/$$(basename $(SCENE))}; T=$(TRIS) && \

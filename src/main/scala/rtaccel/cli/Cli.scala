@@ -105,6 +105,8 @@ final case class Args(kv: Map[String, String]) {
   def path(k: String): Path = Paths.get(need(k))
   def int(k: String, default: Int): Int = opt(k).map(v => v.toIntOption.getOrElse(
     throw new InputError(s"--$k must be an integer (got '$v')"))).getOrElse(default)
+  def double(k: String, default: Double): Double = opt(k).map(v => v.toDoubleOption.filter(!_.isNaN).getOrElse(
+    throw new InputError(s"--$k must be a number (got '$v')"))).getOrElse(default)
 }
 
 /** A check of a run that completed failed (exit status 3); the run's outputs and JSON are already written. */

@@ -11,7 +11,7 @@ import rtaccel.config.PlatformParams
 import rtaccel.io.InputError
 import rtaccel.mc.AxiParams
 import rtaccel.cache.hw.CachePath
-import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
+import rtaccel.model.{AccessRecorder, AccessSink, MemFaults, RayStats, Traversal}
 import rtaccel.scene.{Hits, Rays}
 import rtaccel.sim.{DramConfig, ImageFile, RaysFile, SimHarness, SimSetup}
 import rtaccel.top.{RegMap, RtAccelTop}
@@ -43,19 +43,22 @@ object Simulate {
   def failures(j: ujson.Obj): Seq[String] = Seq(
     "mismatch_vs_model" -> (j("mismatch_vs_model").num > 0), "lost" -> (j("lost").num > 0),
     "duplicated" -> (j("duplicated").num > 0), "timeout" -> j("timed_out").bool,
-    "overflow_vs_model" -> (j("overflow_disagreements").num > 0),
+    "overflow_vs_model" -> (j("overflow_disagreements").num > 0), "read_errors_vs_model" -> (j("read_error_disagreements").num > 0),
     // null when there is no cache to compare
     "cache_counts_match_model" -> (j("cache_counts_match_model") == ujson.False)).collect { case (n, true) => n }
 
   /** Options of one run that do not change the platform. */
   final case class SimOptions(label: String, memJitter: Int = 0, hostStall: Int = 0, seed: Int = 1,
-                              work: String = "build/sim", maxCycles: Option[Long] = None, scaleExp: Int = 0)
+                              work: String = "build/sim", maxCycles: Option[Long] = None, scaleExp: Int = 0,
+                              memErrorRate: Double = 0.0) {
+    val errorThreshold: Int = rtaccel.model.MemFaults.threshold(memErrorRate)
+  }
 
   def run(a: Args): Outcome = {
     val (scene, rays, scaleExp) = Cli.inputs(a)
     val b = Cli.build(scene, Cli.params(a), a)
     run(b, rays, SimOptions(a.get("scene-label", a.need("tris")), a.int("mem-jitter", 0), a.int("host-stall", 0),
-      a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp))
+      a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp, a.double("mem-error-rate", 0.0)))
   }
 
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
@@ -64,29 +67,33 @@ object Simulate {
     CachePath.validate(p)
     val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
     val img = MemoryImage.pack(b.bvh, b.scene, p)
+    val axi = AxiParams(dataBits = p.axiDataBits)
+    val lay0 = ImageFile.layout(img, axi)
+    // the poisoned beats the DRAM model will answer with SLVERR (MEM_ERROR_RATE), known to the model
+    val faults = MemFaults(o.errorThreshold, o.seed, axi.beatBytes, p.nodeStrideBytes, lay0.primBaseBytes, p.primStrideBytes)
     val stats = new RayStats
     val rec = new AccessRecorder
-    val model = new Traversal(img).traceAll(rays, if (cached) rec else AccessSink.none, stats)
+    val model = new Traversal(img, faults).traceAll(rays, if (cached) rec else AccessSink.none, stats)
     val accessRows = rec.toArray
     // the RTL logs its access order only when a cache is present; it makes exactly the model's accesses
     val logCap = if (cached) SimSetup.pow2(math.max(1, accessRows.length / 5)) else 0
     val label = o.label
-    val axi = AxiParams(dataBits = p.axiDataBits)
     val den = 1000
     val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
-      bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed)
+      bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
     // One folder per simulator build: everything that changes the circuit is in its name.
     val imageBytes = img.numNodes.toLong * p.nodeStrideBytes + 4096 + img.numPrims.toLong * p.primStrideBytes
     val rayCap = SimSetup.pow2(rays.count); val wordCap = SimSetup.pow2((imageBytes + axi.beatBytes - 1) / axi.beatBytes)
     val r = p.refs
     val key = s"tus${p.tus}-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
-      s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" +
+      s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" + (if (o.errorThreshold > 0) s"-err${o.errorThreshold}" else "") +
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "")
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
     val layout = ImageFile.write(img, axi, work.resolve("image.hex"))
     require(layout.words <= wordCap, s"image of ${layout.words} words exceeds the simulator's $wordCap")
+    require(layout == lay0, "the image layout the model's fault map assumed differs from the one written")
     RaysFile.write(rays, work.resolve("rays.hex"))
     val setup = SimSetup(rayCap, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
       wordCap, dram, hostStallPercent = o.hostStall, seed = o.seed, accessLogCapacity = logCap)
@@ -122,6 +129,7 @@ object Simulate {
       val hits = Hits.empty(rays.count)
       val seen = new Array[Int](rays.count)
       val rtlOverflow = new Array[Boolean](rays.count)
+      val rtlReadError = new Array[Boolean](rays.count)
       for (k <- 0 until math.min(received, rays.count.toLong).toInt) {
         dut.io.readIdx.poke(k.U)
         val w = dut.io.readData.peek().litValue
@@ -132,6 +140,7 @@ object Simulate {
           hits.t(id) = java.lang.Float.intBitsToFloat(word(1)); hits.prim(id) = word(2)
           hits.u(id) = java.lang.Float.intBitsToFloat(word(3)); hits.v(id) = java.lang.Float.intBitsToFloat(word(4))
           if ((word(5) & 1) != 0) rtlOverflow(id) = true
+          if ((word(5) & 2) != 0) rtlReadError(id) = true
         }
       }
       def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
@@ -139,6 +148,7 @@ object Simulate {
         bits(hits.t(i)) != bits(model.t(i)) || bits(hits.u(i)) != bits(model.u(i)) || bits(hits.v(i)) != bits(model.v(i))))
       val lost = seen.count(_ == 0)
       val overflowDisagree = (0 until rays.count).count(i => seen(i) >= 1 && rtlOverflow(i) != (model.prim(i) == Hits.Overflow))
+      val readErrorDisagree = (0 until rays.count).count(i => seen(i) >= 1 && rtlReadError(i) != (model.prim(i) == Hits.ReadError))
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
       // and against the model's N-TU interleaved order (the fast model's prediction)
       val logged = if (!cached) Array.empty[Int] else {
@@ -161,7 +171,9 @@ object Simulate {
         "scene" -> label, "config" -> p.name, "tus" -> p.tus, "m" -> p.m, "mppl" -> p.mppl,
         "stack_depth" -> p.stackDepth, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
         "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
-        "overflow_disagreements" -> overflowDisagree, "read_errors" -> hits.prim.count(_ == Hits.ReadError),
+        "overflow_disagreements" -> overflowDisagree, "read_errors" -> rtlReadError.count(identity),
+        "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,
+        "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
         "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,
         "timed_out" -> (received < rays.count), "normalize_exponent" -> o.scaleExp,

@@ -10,6 +10,7 @@ class BoxJob(p: PlatformParams) extends Bundle {
   val ray = new RayData
   val tmax = UInt(32.W)
   val words = Vec(7 * p.m, UInt(32.W)) // child j: min xyz, max xyz, ref at 7j..7j+6
+  val err = Bool()                     // read with a memory error: the words are not to be trusted
 }
 
 /** M slab tests in parallel, four register levels, one node per cycle, no stalls. The operation order is
@@ -39,12 +40,13 @@ class BoxPipe(p: PlatformParams) extends Module {
   io.out.valid := v4
   val res = Wire(new BoxResult(p))
   res.tu := j3.tu
+  res.err := j3.err
   for (c <- 0 until p.m) {
     def lo(a: Int) = lohi(6 * c + 2 * a); def hi(a: Int) = lohi(6 * c + 2 * a + 1)
     val tnear = Fp.maxNum(f, Fp.maxNum(f, Fp.maxNum(f, j3.ray.tmin, lo(0)), lo(1)), lo(2))
     val tfar = Fp.minNum(f, Fp.minNum(f, Fp.minNum(f, j3.tmax, hi(0)), hi(1)), hi(2))
     res.tnear(c) := tnear
-    res.hit(c) := Fp.le(f, tnear, tfar) && j3.words(7 * c + 6) =/= 0.U
+    res.hit(c) := Fp.le(f, tnear, tfar) && j3.words(7 * c + 6) =/= 0.U && !j3.err
     res.cref(c) := j3.words(7 * c + 6)
   }
   io.out.bits := RegNext(res)

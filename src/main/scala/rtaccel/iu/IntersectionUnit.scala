@@ -54,6 +54,9 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, maxOutstanding: Int = 1
   val isLeaf = job.isLeaf
   val buf = Reg(Vec(math.max(nodeWords, primWords), UInt(32.W)))
   val beatIdx = RegInit(0.U(8.W))
+  // a unit (node or primitive) is bad if any of its beats came with a memory error
+  val errAcc = RegInit(false.B)
+  val unitErr = errAcc || io.mem.resp.bits.err
   val primIdx = RegInit(0.U(8.W))
   io.mem.resp.ready := jobs.io.deq.valid
   val unitBeats = Mux(isLeaf, (primWords / beatWords).U, (nodeWords / beatWords).U)
@@ -68,6 +71,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, maxOutstanding: Int = 1
   }
   when(beatFire) {
     buf := words
+    errAcc := unitErr && !unitDone
     beatIdx := Mux(unitDone, 0.U, beatIdx + 1.U)
     when(unitDone && isLeaf) { primIdx := Mux(jobDone, 0.U, primIdx + 1.U) }
   }
@@ -79,6 +83,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, maxOutstanding: Int = 1
   boxPipe.io.in.bits.ray := job.ray
   boxPipe.io.in.bits.tmax := job.tmax
   boxPipe.io.in.bits.words := VecInit(words.take(7 * p.m))
+  boxPipe.io.in.bits.err := unitErr
   val triPipe = Module(new TriPipe(p))
   triPipe.io.in.valid := unitDone && isLeaf
   triPipe.io.in.bits.tu := job.tu
@@ -86,6 +91,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, maxOutstanding: Int = 1
   triPipe.io.in.bits.tmax := job.tmax
   triPipe.io.in.bits.words := VecInit(words.take(10))
   triPipe.io.in.bits.last := jobDone
+  triPipe.io.in.bits.err := unitErr
   io.box := boxPipe.io.out
   io.tri := triPipe.io.out
 }

@@ -25,6 +25,7 @@ class BoxResult(p: PlatformParams) extends Bundle {
   val hit = Vec(p.m, Bool())
   val tnear = Vec(p.m, UInt(32.W))
   val cref = Vec(p.m, UInt(32.W))
+  val err = Bool() // the node came with a memory error: no child is hit
 }
 
 /** Möller–Trumbore result for one primitive of a leaf; `last` marks the leaf's final primitive. */
@@ -36,4 +37,5 @@ class TriResult(p: PlatformParams) extends Bundle {
   val v = UInt(32.W)
   val prim = UInt(32.W)
   val last = Bool()
+  val err = Bool() // the primitive came with a memory error: not hit
 }

@@ -11,6 +11,7 @@ class TriJob(p: PlatformParams) extends Bundle {
   val tmax = UInt(32.W)
   val words = Vec(10, UInt(32.W)) // v0, v1, v2 (9 floats) and the scene triangle id
   val last = Bool()
+  val err = Bool()                // read with a memory error: never a hit
 }
 
 /** Möller–Trumbore, one primitive per cycle, no stalls, in the operation order of
@@ -82,10 +83,11 @@ class TriPipe(p: PlatformParams) extends Module {
   val res = Wire(new TriResult(p))
   res.tu := j8.tu
   res.hit := !Fp.eq(f, det8, zero) && Fp.ge(f, u, zero) && Fp.ge(f, v, zero) && Fp.le(f, add(u, v), one) &&
-    Fp.ge(f, t, j8.ray.tmin) && Fp.lt(f, t, j8.tmax)
+    Fp.ge(f, t, j8.ray.tmin) && Fp.lt(f, t, j8.tmax) && !j8.err
   res.t := t; res.u := u; res.v := v
   res.prim := j8.words(9)
   res.last := j8.last
+  res.err := j8.err
   io.out.bits := RegNext(res)
   io.out.valid := RegNext(v8, false.B)
 }

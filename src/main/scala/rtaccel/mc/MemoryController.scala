@@ -11,10 +11,14 @@ class FetchReq extends Bundle {
   val childRef = UInt(32.W)
 }
 
-/** One bus-width beat of fetched data; `last` marks the final beat of its request. */
+/** One bus-width beat of fetched data; `last` marks the final beat of its request; `err` = the memory
+  * answered it with an error (AXI RRESP other than OKAY): its data must not be used, and a cache that keeps
+  * the beat keeps the error with it (poison), so that every later reader sees it too.
+  */
 class FetchBeat(dataBits: Int) extends Bundle {
   val data = UInt(dataBits.W)
   val last = Bool()
+  val err = Bool()
 }
 
 /** A memory read of `beats` consecutive full-width beats from byte address `addr` (beat aligned). */
@@ -49,6 +53,7 @@ class McCounters extends Bundle {
   val primsRequested = UInt(48.W)
   val bytesRequested = UInt(48.W)
   val busyBeats = UInt(48.W)
+  val readErrors = UInt(48.W)
   val nodeCache = new PathStats
   val primCache = new PathStats
 }
@@ -270,6 +275,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     sink.valid := io.axi.r.valid && memOrder.io.deq.valid && rHead.path === i.U
     sink.bits.data := io.axi.r.bits.data
     sink.bits.last := rLast
+    sink.bits.err := io.axi.r.bits.resp =/= 0.U // SLVERR or DECERR
   }
   memOrder.io.deq.ready := io.axi.r.fire && rLast
   when(io.axi.r.fire) { rBeat := Mux(rLast, 0.U, rBeat + 1.U) }
@@ -294,6 +300,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
   io.counters.primsRequested := counter(count, reqFire && isLeaf)
   io.counters.bytesRequested := counter(Mux(isLeaf, count << log2Ceil(p.primStrideBytes), p.nodeStrideBytes.U), reqFire)
   io.counters.busyBeats := counter(1.U, io.axi.r.fire)
+  io.counters.readErrors := counter(1.U, io.axi.r.fire && io.axi.r.bits.resp =/= 0.U)
 
   when(io.axi.r.valid) { assert(memOrder.io.deq.valid, "MemoryController: an R beat with no read outstanding") }
   if (respBufferBeats > 0)

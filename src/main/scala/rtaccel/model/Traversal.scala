@@ -6,7 +6,7 @@ import rtaccel.scene.{Hits, Rays}
 /** Per-ray counters a traversal unit would keep. */
 final class RayStats {
   var nodeFetches = 0L; var leafFetches = 0L; var primTests = 0L; var boxTests = 0L
-  var maxStack = 0; var overflows = 0
+  var maxStack = 0; var overflows = 0; var readErrors = 0
 }
 
 /** Reference traversal of one TU over the packed memory image (paper Section 2), defining the order the
@@ -23,7 +23,7 @@ final class RayStats {
   * accesses stay identical to the hardware's; the flagged ray's hit record is `Hits.Overflow` (prim -3,
   * t = +inf, u = v = 0), never a plausible wrong hit.
   */
-final class Traversal(img: MemoryImage) {
+final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private val p = img.p
   private val m = p.m
   private val codec = img.codec
@@ -45,13 +45,14 @@ final class Traversal(img: MemoryImage) {
     var tmax = r.tmax
     var bestPrim = -1; var bestU = 0f; var bestV = 0f
     var sp = 0
-    var overflowed = false
+    var overflowed = false; var readError = false
     var cur = 0; var curLevel = 0; var hasCur = true // root node: ref 0 means node id 0
     while (hasCur) {
       if (!codec.isPrim(cur)) {
         val id = codec.nodeId(cur)
         sink.node(i, id, curLevel); st.nodeFetches += 1
         var k = 0; var j = 0
+        if (faults.nodeBad(id)) { readError = true; j = m } // no child of a poisoned node is trusted
         while (j < m) {
           val ref = img.childRef(id, j)
           if (!codec.isEmpty(ref)) {
@@ -80,7 +81,8 @@ final class Traversal(img: MemoryImage) {
         var s = first
         while (s < first + n) {
           slot = s; st.primTests += 1
-          if (RayTriangle.test(r, tmax, coord, tri)) {
+          if (faults.primBad(s)) readError = true
+          else if (RayTriangle.test(r, tmax, coord, tri)) {
             tmax = tri.t; bestPrim = img.primId(s); bestU = tri.u; bestV = tri.v
           }
           s += 1
@@ -92,7 +94,11 @@ final class Traversal(img: MemoryImage) {
         if (!(sT(sp) > tmax)) { cur = sRef(sp); curLevel = sLvl(sp); hasCur = true }
       }
     }
-    if (overflowed) { st.overflows += 1; out.t(i) = Float.PositiveInfinity; out.prim(i) = Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f }
+    if (overflowed) st.overflows += 1
+    if (readError) st.readErrors += 1
+    if (readError || overflowed) {
+      out.t(i) = Float.PositiveInfinity; out.prim(i) = if (readError) Hits.ReadError else Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f
+    }
     else if (bestPrim >= 0) { out.t(i) = tmax; out.prim(i) = bestPrim; out.u(i) = bestU; out.v(i) = bestV }
   }
 

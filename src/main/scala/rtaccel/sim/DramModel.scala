@@ -10,9 +10,12 @@ import rtaccel.mc.{AxiAr, AxiParams, AxiReadMaster}
   * latencyCycles: cycles from the AR handshake to the first R beat of an isolated request (>= 1).
   * bytesPerCycleNum / bytesPerCycleDen: sustained bandwidth, an exact rational number of bytes per cycle.
   * randomExtraLatency: each request waits a further pseudo-random 0..randomExtraLatency cycles (LFSR, seed).
+  * errorThreshold (of 65536) / errorSeed: poisoned beats (rtaccel.model.MemFaults): a poisoned beat is
+  * answered with SLVERR and inverted data, so that a platform that ignored RRESP would compute wrong hits.
   */
 final case class DramConfig(latencyCycles: Int, bytesPerCycleNum: Int, bytesPerCycleDen: Int,
-                            randomExtraLatency: Int = 0, seed: Int = 1) {
+                            randomExtraLatency: Int = 0, seed: Int = 1, errorThreshold: Int = 0, errorSeed: Int = 1) {
+  require(errorThreshold >= 0 && errorThreshold <= rtaccel.model.MemFaults.One, s"error threshold must be 0..65536 (got $errorThreshold)")
   require(latencyCycles >= 1, s"DRAM latency must be at least 1 cycle (got $latencyCycles)")
   require(bytesPerCycleNum >= 1 && bytesPerCycleDen >= 1, s"bandwidth must be a positive fraction (got $bytesPerCycleNum/$bytesPerCycleDen)")
   require(randomExtraLatency >= 0 && randomExtraLatency < (1 << 16), "random extra latency must be in 0..65535")
@@ -100,8 +103,18 @@ class DramModel(axi: AxiParams, words: Int, hexFile: String, cfg: DramConfig, qu
 
   r.valid := started && haveCredit
   r.bits.id := head.id
-  r.bits.data := Mux(inRange, mem(wordIdx(math.max(log2Ceil(words), 1) - 1, 0)), 0.U)
-  r.bits.resp := Mux(inRange, 0.U, 3.U)
+  val word = mem(wordIdx(math.max(log2Ceil(words), 1) - 1, 0))
+  // the same hash as rtaccel.model.MemFaults.hash16, so the model knows which beats are poisoned
+  val poisoned: Bool = if (cfg.errorThreshold == 0) false.B else {
+    import rtaccel.model.MemFaults
+    val x = wordIdx.pad(32)(31, 0) ^ (cfg.errorSeed.toLong & 0xffffffffL).U(32.W)
+    val m1 = (x * MemFaults.Mul1.U(32.W))(31, 0)
+    val h1 = m1 ^ (m1 >> 15)
+    val m2 = (h1 * MemFaults.Mul2.U(32.W))(31, 0)
+    (m2 ^ (m2 >> 13))(15, 0) < cfg.errorThreshold.U(17.W)
+  }
+  r.bits.data := Mux(inRange, Mux(poisoned, ~word, word), 0.U)
+  r.bits.resp := Mux(!inRange, 3.U, Mux(poisoned, 2.U, 0.U)) // DECERR, SLVERR, OKAY
   r.bits.last := isLast
   q.io.deq.ready := r.fire && isLast
 

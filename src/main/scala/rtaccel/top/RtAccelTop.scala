@@ -18,14 +18,15 @@ class AxisBeat(bits: Int) extends Bundle {
 object RtAccelTop {
   /** Ray beat: 9 words, word i at bits 32i+31..32i: id, ox, oy, oz, dx, dy, dz, tmin, tmax. */
   val RayBits = 9 * 32
-  /** Hit beat: 6 words: id, t, prim, u, v, flags (bit 0 = stack overflow). */
+  /** Hit beat: 6 words: id, t, prim, u, v, flags (bit 0 = stack overflow, bit 1 = memory read error). */
   val HitBits = 6 * 32
   /** Counted here, per cycle. */
   val eventNames: Seq[String] = Seq("cycles", "busy_cycles", "rays_in", "hits_out", "stall_iu_arbitration",
     "stall_memory_request", "stall_memory_data", "stall_host_backpressure", "tu_busy_cycles")
   /** Counted by the memory controller (not cleared by the control register). */
   val memoryNames: Seq[String] = Seq("node_requests", "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats",
-    "node_cache_hits", "node_cache_misses", "node_cache_bypasses", "prim_cache_hits", "prim_cache_misses", "prim_cache_bypasses")
+    "node_cache_hits", "node_cache_misses", "node_cache_bypasses", "prim_cache_hits", "prim_cache_misses", "prim_cache_bypasses",
+    "mem_read_errors")
   val counterNames: Seq[String] = eventNames ++ memoryNames
 }
 
@@ -63,7 +64,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   io.rays.ready := tc.io.in.ready
   io.hits.valid := tc.io.out.valid
   val h = tc.io.out.bits
-  io.hits.bits.tdata := Cat(0.U(31.W), h.overflow, h.v, h.u, h.prim, h.t, h.id)
+  io.hits.bits.tdata := Cat(0.U(30.W), h.readError, h.overflow, h.v, h.u, h.prim, h.t, h.id)
   io.hits.bits.tlast := false.B
   tc.io.out.ready := io.hits.ready
 
@@ -99,5 +100,5 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val mcc = mc.io.counters // in memoryNames order
   regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
     mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,
-    mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses).map(_.pad(64)))
+    mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses, mcc.readErrors).map(_.pad(64)))
 }

@@ -21,6 +21,7 @@ class TuResult extends Bundle {
   val u = UInt(32.W)
   val v = UInt(32.W)
   val overflow = Bool()
+  val readError = Bool() // a node or primitive of this ray came with a memory error
 }
 
 /** Traversal unit (paper Section 4): control flow and the traversal stack of one ray, in exactly the order
@@ -53,6 +54,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   val tmax = Reg(UInt(32.W))
   val best = Reg(new TuResult)
   val overflow = Reg(Bool())
+  val readError = Reg(Bool())
   class Entry extends Bundle { val cref = UInt(32.W); val t = UInt(32.W) }
   val stack = Mem(p.stackDepth, new Entry)
   val sp = RegInit(0.U(log2Ceil(p.stackDepth + 1).W))
@@ -62,7 +64,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.ray.ready := state === S.idle
   io.busy := state =/= S.idle
   when(io.ray.fire) {
-    r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B
+    r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B; readError := false.B
     best.id := io.ray.bits.id; best.t := inf; best.prim := "hffffffff".U; best.u := 0.U; best.v := 0.U
     sp := 0.U
     state := S.issue
@@ -78,6 +80,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   // Node: stable rank of each hit child = hit children nearer, or equally near in an earlier slot.
   when(state === S.waitBox && io.box.valid && io.box.bits.tu === index) {
     val b = io.box.bits
+    when(b.err) { readError := true.B } // b.hit is all false then: the ray pops on
     val ranks = (0 until p.m).map { j =>
       PopCount((0 until p.m).filter(_ != j).map { i =>
         if (i < j) b.hit(i) && !Fp.gt(f, b.tnear(i), b.tnear(j)) else b.hit(i) && Fp.gt(f, b.tnear(j), b.tnear(i))
@@ -104,6 +107,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   // Leaf: results arrive in slot order; an earlier equal t is kept.
   when(state === S.waitTri && io.tri.valid && io.tri.bits.tu === index) {
     val t = io.tri.bits
+    when(t.err) { readError := true.B }
     when(t.hit && Fp.lt(f, t.t, tmax)) {
       tmax := t.t; best.t := t.t; best.prim := t.prim; best.u := t.u; best.v := t.v
     }
@@ -122,8 +126,10 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.result.valid := state === S.done
   io.result.bits := best
   io.result.bits.overflow := overflow
-  when(overflow) {
-    io.result.bits.t := inf; io.result.bits.prim := (rtaccel.scene.Hits.Overflow & 0xffffffffL).U(32.W)
+  io.result.bits.readError := readError
+  private def code(c: Int) = (c & 0xffffffffL).U(32.W)
+  when(overflow || readError) { // a read error wins over an overflow, as in the model
+    io.result.bits.t := inf; io.result.bits.prim := Mux(readError, code(rtaccel.scene.Hits.ReadError), code(rtaccel.scene.Hits.Overflow))
     io.result.bits.u := 0.U; io.result.bits.v := 0.U
   }
   when(io.result.fire) { state := S.idle }

@@ -4,6 +4,7 @@ import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
 import rtaccel.cli.{Cli, Simulate}
 import rtaccel.config.{CacheParams, Presets}
+import rtaccel.model.MemFaults
 import rtaccel.scene.{Rays, Scene}
 
 /** Whole-platform RTL (Verilator) against the reference model, ray by ray, bit for bit.
@@ -32,18 +33,20 @@ class PlatformSpec extends AnyFunSuite {
   }
 
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
-                     node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64) = {
+                     node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (Set("lrp", "hybrid")(node.policy) && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
-    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall))
+    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
+      memErrorRate = errorRate, seed = seed))
     val j = o.json
     info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +
       f"mismatch ${j("mismatch_vs_model").num}%.0f lost ${j("lost").num}%.0f dup ${j("duplicated").num}%.0f")
     assert(j("timed_out").bool == false, "the platform did not finish")
     assert(j("mismatch_vs_model").num == 0 && j("lost").num == 0 && j("duplicated").num == 0, ujson.write(j))
     assert(j("overflowed").num == j("model_overflowed").num && j("overflow_disagreements").num == 0)
+    assert(j("read_errors").num == j("model_read_errors").num && j("read_error_disagreements").num == 0)
     assert(j("ok").bool && j("failures").arr.isEmpty, ujson.write(j))
     assert(j("node_requests").num == j("model_node_fetches").num, "the RTL fetched a different number of nodes")
     assert(j("prim_requests").num == j("model_prim_tests").num, "the RTL fetched a different number of primitives")
@@ -81,6 +84,20 @@ class PlatformSpec extends AnyFunSuite {
     info(s"${j("overflowed").num.toInt} of ${rays.count} rays overflowed a 2-entry stack")
     assert(j("model_overflowed").num > 0 && j("model_overflowed").num < rays.count, "the test stack must overflow some rays, not all")
   }
+
+  // Memory read errors (poisoned beats, the same set in the DRAM model and the model): exactly the rays that
+  // read one are flagged prim -2, every other ray stays bit-exact; through caches, the poison stays cached.
+  for ((what, tus, node, prim) <- Seq(("no cache", 4, CacheParams(), CacheParams()),
+      ("DM node + 2-way LRU primitive caches", 4, CacheParams(64, 1, "dm"), CacheParams(64, 2, "lru"))))
+    test(s"memory read errors flag exactly the affected rays, the rest bit-exact: $what") {
+      // a seed whose poison spares the root node (a poisoned root fails every ray, which tests less)
+      val rate = 0.003
+      val seed = (1 to 1000).find(s => !MemFaults(MemFaults.threshold(rate), s, 32, 128, 0, 64).nodeBad(0)).get
+      val j = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = rate, seed = seed)
+      info(f"${j("read_errors").num}%.0f of ${rays.count} rays read a poisoned beat (${j("mem_error_beats").num}%.0f error beats)")
+      assert(j("model_read_errors").num > 0 && j("model_read_errors").num < rays.count, "the rate must hit some rays, not all")
+      assert(j("mem_error_beats").num > 0 && j("mem_error_beats").num == j("counters")("mem_read_errors").num)
+    }
 
   test("random memory latency and host backpressure change no result") {
     val quiet = runOne(4, 4, 4, rays, scene)

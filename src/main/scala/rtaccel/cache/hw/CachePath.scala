@@ -150,7 +150,8 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
   }
 
   // ---------------------------------------------------------------- data: tickets strictly in order
-  val data = SyncReadMem(cg.dataLines << cg.beatBits, UInt(dataBits.W))
+  // each beat is stored with its error bit (MSB): a poisoned beat stays poisoned while it is cached
+  val data = SyncReadMem(cg.dataLines << cg.beatBits, UInt((dataBits + 1).W))
   val outQ = Module(new Queue(new FetchBeat(dataBits), 4))
   io.out <> outQ.io.deq
   val head = ticketQ.io.deq.bits
@@ -168,10 +169,11 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
   val canTakeMiss = missHead && !inflight && (head.silent || outQ.io.enq.ready)
   io.memResp.ready := canTakeMiss
   val missBeat = io.memResp.fire
-  when(missBeat && head.fill) { data.write(addr(head.line, beat), io.memResp.bits.data) }
+  when(missBeat && head.fill) { data.write(addr(head.line, beat), Cat(io.memResp.bits.err, io.memResp.bits.data)) }
 
   outQ.io.enq.valid := inflight || (missBeat && !head.silent)
-  outQ.io.enq.bits.data := Mux(inflight, rd, io.memResp.bits.data)
+  outQ.io.enq.bits.data := Mux(inflight, rd(dataBits - 1, 0), io.memResp.bits.data)
+  outQ.io.enq.bits.err := Mux(inflight, rd(dataBits), io.memResp.bits.err)
   outQ.io.enq.bits.last := Mux(inflight, inflightLast, lastBeat)
 
   val beatDone = readIssue || missBeat
