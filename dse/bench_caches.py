@@ -5,19 +5,26 @@ the same rays, caches and TUS=N, last line). For each N: node-cache miss rate of
 N-TU interleaving, rays/s of the RTL vs the model's prediction (MVA, rtaccel.cache.Throughput) and bandwidth bound, and wall time per ray of each (RTL:
 simulation only, build excluded; model: the replay, median of its repeats, and trace + replay). Prints a table
 and, last, one JSON line; writes OUT.csv with a provenance line. Bad input: one `error:` line, exit 2.
+A run whose JSON says "ok": false (its own check failed) is refused with one `error:` line, exit 3.
 """
 import json
 import os
 import re
 import sys
 
+from scenes.cli import run
+
+from .common import NoJsonResult, exit_check_failed, failures_text, last_json_file, provenance_line, write_text
+
 
 def last_json(path):
     try:
-        lines = [l for l in open(path).read().splitlines() if l.strip().startswith("{")]
-        return json.loads(lines[-1])
-    except (OSError, IndexError, json.JSONDecodeError) as e:
+        j = last_json_file(path)
+    except (OSError, NoJsonResult) as e:
         raise SystemExit(f"error: {path}: no JSON result line ({e}); rerun make bench-caches")
+    if j.get("ok") is False:  # a failed simulation's cycles and miss rates are no figures to compare
+        exit_check_failed(f"{path}: the run's check failed ({failures_text(j)}); fix it and rerun make bench-caches")
+    return j
 
 
 def rows(d):
@@ -54,13 +61,10 @@ def rows(d):
 def main(out_csv, name, d):
     rs = rows(d)
     cols = list(rs[0].keys())
-    prov = f"# scene={rs[0]['scene']} config={rs[0]['config']} node_cache={rs[0]['entries']}x{rs[0]['policy']} rtaccel={rs[0]['rtaccel']}\n"
-    tmp = out_csv + ".tmp"
-    with open(tmp, "w") as f:
-        f.write(prov + ",".join(cols) + "\n")
-        for r in rs:
-            f.write(",".join(f"{r[c]:.6g}" if isinstance(r[c], float) else str(r[c]) for c in cols) + "\n")
-    os.replace(tmp, out_csv)
+    prov = provenance_line(rs[0]["scene"], rs[0]["config"], rs[0]["rtaccel"],
+                           fields={"node_cache": f"{rs[0]['entries']}x{rs[0]['policy']}"})
+    write_text(out_csv, prov + ",".join(cols) + "\n" + "".join(
+        ",".join(f"{r[c]:.6g}" if isinstance(r[c], float) else str(r[c]) for c in cols) + "\n" for r in rs))
     print(f"[bench-caches] {name}: {rs[0]['rays']} rays, node cache {rs[0]['entries']} {rs[0]['policy']}; "
           f"RTL = Verilator simulation (build excluded), model = trace-driven replay (median of {rs[0]['model_repeat']})")
     print(f"  {'TUs':>4} {'miss RTL':>9} {'model':>8} {'diff pp':>8} {'rays/s RTL':>11} {'predicted':>10} {'pred/RTL':>8} {'BW bound':>9} "
@@ -77,4 +81,4 @@ def main(out_csv, name, d):
 if __name__ == "__main__":
     if len(sys.argv) != 4:
         raise SystemExit("error: usage: python -m dse.bench_caches OUT.csv NAME DIR")
-    main(*sys.argv[1:4])
+    run(lambda _: main(*sys.argv[1:4]))  # an unwritable OUT.csv: one error line, like every other bad input

@@ -2,10 +2,18 @@
 import json
 import sys
 
+from .common import NoJsonResult, last_json_file
+
+
+def result(path):
+    try:
+        return last_json_file(path)
+    except (OSError, NoJsonResult) as e:
+        raise SystemExit(f"error: {path}: no JSON result line ({e}); rerun make bench")
+
 
 def main(name, model_path, embree_path):
-    m = json.loads(open(model_path).read().strip().splitlines()[-1])
-    e = json.loads(open(embree_path).read().strip().splitlines()[-1])
+    m, e = result(model_path), result(embree_path)
     assert m["rays"] == e["rays"], "model and Embree must be timed on the same rays"
     mr, er = m["model_rays_per_s_median"], e["embree_rays_per_s_median"]
     mb, eb = m["model_build_s_median"], e["embree_build_s_median"]

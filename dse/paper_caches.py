@@ -14,6 +14,8 @@ The cache figures of Collinson & Sinnen 2017 for one scene (`make paper-caches` 
 --java is a shell command prefix that starts the JVM on the rtaccel classpath (the Makefile passes its $(JAVA);
 default: $RTACCEL_JAVA). Every file is written atomically once its figure is complete; every CSV starts with a
 `# scene=... config=... rtaccel=<version>` line. Bad input: one `error:` line, exit status 2, nothing written.
+An entry point whose own check fails (status 3, JSON line with "ok": false) stops the driver with one `error:`
+line naming its "failures" and exit status 3; the figure it was for is not written. A JVM crash: status 1.
 """
 import json
 import os
@@ -23,10 +25,11 @@ import sys
 import tempfile
 import time
 
-from scenes.cli import ArgParser, atomic_file, run
+from scenes.cli import EXIT_CHECK_FAILED, ArgParser, run
 from scenes.errors import UserError
 
 from . import plot_caches, plot_tus
+from .common import NoJsonResult, failures_text, last_json as parse_last_json, provenance_line, write_text
 
 # The paper's cache sizes (Sections 6.3 and 8): the largest node cache of its FPGA, and the split into half
 # that node cache plus a primitive cache of the same storage (entries counted in primitives, lines = 4096/MPPL).
@@ -38,6 +41,10 @@ TUS_CACHE_DESC = "8192x1-dm"  # how SweepTus names TUS_CACHE in its provenance l
 
 class JavaFailed(Exception):
     """The JVM crashed or broke its output contract: not the user's input, so exit status 1, not 2."""
+
+
+class JavaCheckFailed(Exception):
+    """The entry point ran but one of its own checks failed (status 3): its numbers are not a result to plot."""
 
 
 def log(msg):
@@ -88,6 +95,15 @@ def run_java(java, main, args, what):
         out = so.read()
     if rc == 0:
         return out
+    if rc == EXIT_CHECK_FAILED:
+        try:
+            j = parse_last_json(out)
+        except NoJsonResult as e:
+            raise JavaFailed(f"{what}: rtaccel.cli.{main} exited with status 3 (check failed) but {e}")
+        if j.get("ok") is not False:
+            raise JavaFailed(f"{what}: rtaccel.cli.{main} exited with status 3 (check failed) but its JSON line "
+                             f"does not say \"ok\": false")
+        raise JavaCheckFailed(f"{what}: rtaccel.cli.{main} check failed: {failures_text(j)}")
     errs = [t for t in tail if t.startswith("error:")]
     if rc == 2 and errs:  # the entry point refused its input: the same kind of failure as ours
         raise UserError(f"{what}: {errs[-1][len('error:'):].strip()}")
@@ -96,16 +112,10 @@ def run_java(java, main, args, what):
 
 
 def last_json(out, what):
-    for line in reversed(out.splitlines()):
-        if line.startswith("{"):
-            return json.loads(line)
-    raise JavaFailed(f"{what}: no JSON result line on stdout")
-
-
-def write_text(path, text):
-    with atomic_file(path) as tmp:
-        with open(tmp, "w") as f:
-            f.write(text)
+    try:
+        return parse_last_json(out)
+    except NoJsonResult:
+        raise JavaFailed(f"{what}: no JSON result line on stdout")
 
 
 def golden_desc(rays):
@@ -121,7 +131,8 @@ def golden_desc(rays):
 class Scene:
     def __init__(self, a):
         self.a = a
-        self.base = ["--tris", a.tris, "--scene-label", a.scene, "--rays", a.rays, "--config", a.config, "--m", a.m]
+        self.base = ["--tris", a.tris, "--scene-label", a.scene, "--rays", a.rays, "--config", a.config, "--m", a.m,
+                     "--tus", "1"]  # Figs 8, 9, 11 are one TU's access stream
         self.runs = []  # every CacheSim JSON, for cachesim.jsonl
         self.name = os.path.splitext(os.path.basename(a.scene))[0]
 
@@ -135,8 +146,8 @@ class Scene:
 
     def prov(self, j, rest, version=None):
         """The first line of every CSV: what made it (scene, rays, config, version) and how."""
-        return (f"# scene={self.a.scene} rays={j['rays']}{golden_desc(self.a.rays)} config={j['config']} M={j['m']} "
-                f"{rest} rtaccel={version or j['rtaccel']}\n")
+        return provenance_line(self.a.scene, j["config"], version or j["rtaccel"],
+                               scene_fields=f"rays={j['rays']}{golden_desc(self.a.rays)}", fields=f"M={j['m']} {rest}")
 
     def fig11(self):
         out = self.a.out
@@ -253,6 +264,9 @@ def main(argv=None):
     except JavaFailed as e:
         print(f"error: {name}: {e}", file=sys.stderr)
         return 1
+    except JavaCheckFailed as e:
+        print(f"error: {name}: {e}", file=sys.stderr)
+        return EXIT_CHECK_FAILED
     log(f"{name}: done in {time.time() - t0:.0f} s; outputs in {a.out}")
     return 0
 

@@ -13,7 +13,8 @@ import os
 import numpy as np
 
 from dse.axes import log2_x
-from scenes.cli import ArgParser, atomic_file, run
+from dse.common import save_png
+from scenes.cli import ArgParser, run
 from scenes.errors import UserError
 
 BANDWIDTH_COLUMNS = ("mppl", "rays", "nodes", "leaves", "depth", "node_accesses", "leaf_accesses",
@@ -64,11 +65,6 @@ def _title(base, comments):
     return base + (f"\n{comments[0]}" if comments else "")
 
 
-def _save(fig, path):
-    with atomic_file(path, suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-
-
 def plot_bandwidth(d, out):
     import matplotlib.pyplot as plt
 
@@ -86,7 +82,7 @@ def plot_bandwidth(d, out):
     ax.set_title(_title("Bandwidth per ray vs MPPL", comments), fontsize=10)
     fig.tight_layout(rect=(0, 0.03 + 0.025 * len(comments), 1, 1))
     _footer(fig, comments)
-    _save(fig, out)
+    save_png(fig, out)
     plt.close(fig)
 
 
@@ -115,7 +111,7 @@ def plot_levels(d, out):
     fig.suptitle(_title("Node accesses by hierarchy level", comments), fontsize=11)
     fig.tight_layout(rect=(0, 0.03 + 0.02 * len(comments), 1, 1))
     _footer(fig, comments)
-    _save(fig, out)
+    save_png(fig, out)
     plt.close(fig)
 
 

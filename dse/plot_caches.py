@@ -15,7 +15,8 @@ import os
 import numpy as np
 
 from dse.axes import log2_x
-from scenes.cli import ArgParser, atomic_file, run
+from dse.common import parse_provenance, save_png
+from scenes.cli import ArgParser, run
 from scenes.errors import UserError
 
 # Fig 11 of the paper shows these nine curves; the sweep CSV has more rows (4-way, hybrid), kept in the CSV only.
@@ -110,7 +111,7 @@ def read_bytes(path, text=None):
 
 def provenance(comments):
     """key=value pairs of the first comment line (`scene=... config=... rtaccel=...`)."""
-    return dict(kv.split("=", 1) for kv in (comments[0].split() if comments else []) if "=" in kv)
+    return parse_provenance(comments[0]) if comments else {}
 
 
 def scene_name(comments, path):
@@ -123,8 +124,7 @@ def _finish(fig, footer, out):
 
     fig.text(0.01, 0.005, "\n".join(footer), fontsize=6, va="bottom", ha="left", color="0.3")
     fig.tight_layout(rect=(0, 0.02 + 0.018 * len(footer), 1, 1))
-    with atomic_file(out, suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
+    save_png(fig, out)
     plt.close(fig)
 
 

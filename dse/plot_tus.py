@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from scenes.cli import atomic_file  # noqa: E402
+from dse.common import parse_provenance, save_png  # noqa: E402
 
 
 def read(path):
@@ -21,7 +21,7 @@ def read(path):
     prov = [l[1:].strip() for l in lines if l.startswith("#")]
     rows = [l for l in lines if l and not l.startswith("#")]
     data = np.genfromtxt(rows, delimiter=",", names=True)
-    kv = dict(kv.split("=", 1) for kv in prov[0].split() if "=" in kv) if prov else {}
+    kv = parse_provenance(prov[0]) if prov else {}
     return Path(kv.get("scene", path)).stem, data, prov, kv.get("node_cache", "none")
 
 
@@ -45,8 +45,7 @@ def main(out, *csvs):
         ax.legend(fontsize=7)
     fig.text(0.01, 0.005, "\n".join(footer), fontsize=6, va="bottom")
     fig.tight_layout(rect=(0, 0.02 + 0.02 * len(footer), 1, 1))
-    with atomic_file(out, suffix=".png") as tmp:  # never a half-written PNG
-        fig.savefig(tmp, dpi=120, format="png")
+    save_png(fig, out)
     plt.close(fig)
     print(f"[plot] {out}")
 

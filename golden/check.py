@@ -1,8 +1,11 @@
-"""python -m golden.check --tris TRIS.npy --golden DIR --hits MODEL_HITS.npy [--fail-on-unexplained]
+"""python -m golden.check --tris TRIS.npy --golden DIR --hits MODEL_HITS.npy [--report-only]
 
 Compares a model's hits with the golden (Embree) hits of the same rays and classifies every disagreement.
 A short summary goes to stderr; the LAST stdout line is one JSON object:
-  {"rays", "agree", "classified": {"tie", "edge", "grazing", "degenerate"}, "unexplained", "max_rel_t_err", ...}
+  {"rays", "agree", "classified": {"tie", "edge", "grazing", "degenerate"}, "unexplained", "max_rel_t_err", ...,
+   "faults": {"read_error", "overflow"}}
+A model ray with prim -2 (memory read error) or -3 (stack overflow) never agrees: it is counted in "faults" and,
+having no result, in "unexplained".
 The rules, their order and every threshold are documented in docs/check.md; the constants below are those.
 """
 import json
@@ -11,9 +14,10 @@ import sys
 
 import numpy as np
 
-from scenes.cli import ArgParser, run
+from scenes.cli import EXIT_CHECK_FAILED as CHECK_FAILED, ArgParser, run
 
-from .io import GoldenError, check_hits, check_rays, check_tris, load_hits, load_rays, load_tris
+from .io import (FAULT_CODES, PRIM_OVERFLOW, PRIM_READ_ERROR, GoldenError, check_hits, check_rays, check_tris,
+                 load_hits, load_rays, load_tris)
 from .trace import build_scene, occluded
 
 AGREE_REL = 1e-5        # both hit, |t_a - t_b| <= AGREE_REL * max(|t_a|, |t_b|): agree (coincident triangles)
@@ -24,6 +28,7 @@ SCALE_FLOOR = 1e-3      # S >= SCALE_FLOOR * scene extent
 GRAZE_COS = 1e-3        # grazing: |cos(ray, triangle normal)| < GRAZE_COS
 TIE_REL = 1e-4          # tie: t tolerance = TIE_REL * max(|t_a|, |t_b|) + POS_TOL * S / |d|
 CLASSES = ("tie", "edge", "grazing", "degenerate")
+FAULT_LABELS = {PRIM_READ_ERROR: "read error", PRIM_OVERFLOW: "stack overflow"}
 
 
 def _norm(x):
@@ -116,10 +121,10 @@ def _degenerate_location(o, d, tcap, tris, deg, extent):
     return out
 
 
-def classify(tris, rays, golden_hits, model_hits, examples=10) -> dict:
-    """Compare model hits with golden hits (same ray order). Returns the summary dict printed by the CLI,
-    with extra keys: "disagree", "nonfinite_t_same_prim", "examples" (up to `examples` ray indices per class)
-    and "unexplained_rays" (details of up to `examples` unexplained rays)."""
+def _compare(tris, rays, golden_hits, model_hits):
+    """The per-ray work shared by classify() and ray_classes(): validation, agreement, the class of every
+    disagreeing ray (D: their indices; cls: their class, "" while unexplained; rem: still unexplained) and the
+    float64 re-intersections the unexplained-ray details report."""
     check_tris(tris)
     check_rays(rays)
     n = len(rays)
@@ -130,6 +135,11 @@ def classify(tris, rays, golden_hits, model_hits, examples=10) -> dict:
         if h["prim"].max(initial=-1) >= nt:
             raise GoldenError(f"{name} hits reference prim {int(h['prim'].max())} but the triangle file has {nt} "
                               f"triangles; pass the triangles the hits were traced against")
+    gfault = np.nonzero(golden_hits["prim"] <= PRIM_READ_ERROR)[0]
+    if len(gfault):
+        # Embree cannot fault, so these are not golden hits: comparing against them would hide the model's faults.
+        raise GoldenError(f"golden hits: ray {int(gfault[0])} has fault code {int(golden_hits['prim'][gfault[0]])} "
+                          f"({len(gfault)} such rays); golden hits come from Embree, pass the make golden directory")
     gp, mp = golden_hits["prim"], model_hits["prim"]
     gt, mt = golden_hits["t"].astype(np.float64), model_hits["t"].astype(np.float64)
     gh, mh = gp >= 0, mp >= 0
@@ -163,7 +173,9 @@ def classify(tris, rays, golden_hits, model_hits, examples=10) -> dict:
                                np.max(np.abs(pm), axis=1), np.full(len(D), SCALE_FLOOR * extent)])
 
     cls = np.full(len(D), "", dtype=object)
-    rem = np.ones(len(D), dtype=bool)
+    # A faulted ray has no result to explain a difference with: it takes no class and stays unexplained.
+    fault_d = mp[D] <= PRIM_READ_ERROR
+    rem = ~fault_d
 
     def assign(mask, name):
         nonlocal rem
@@ -214,8 +226,34 @@ def classify(tris, rays, golden_hits, model_hits, examples=10) -> dict:
         mask[sel] = hitloc
         assign(mask, "degenerate")
 
-    counts = {c: int(np.sum(cls == c)) for c in CLASSES}
-    unexplained = np.nonzero(rem)[0]
+    return dict(n=n, agree=agree, max_rel=max_rel, nonfinite=nonfinite, D=D, cls=cls, rem=rem, fault_d=fault_d,
+                gp=gp, mp=mp, gt=gt, mt=mt, g_hit=g_hit, m_hit=m_hit, bg=bg, bm=bm, tm64=tm64)
+
+
+def ray_classes(tris, rays, golden_hits, model_hits) -> np.ndarray:
+    """The class classify() counts each ray in, one string per ray: "agree", one of CLASSES, "unexplained", or
+    a FAULT_CODES name ("read_error", "overflow") for a model fault."""
+    c = _compare(tris, rays, golden_hits, model_hits)
+    out = np.full(c["n"], "agree", dtype=object)
+    D, cls = c["D"], c["cls"].copy()
+    cls[c["rem"]] = "unexplained"
+    for name, code in FAULT_CODES.items():
+        cls[c["fault_d"] & (c["mp"][D] == code)] = name
+    out[D] = cls
+    return out
+
+
+def classify(tris, rays, golden_hits, model_hits, examples=10) -> dict:
+    """Compare model hits with golden hits (same ray order). Returns the summary dict printed by the CLI,
+    with extra keys: "disagree", "nonfinite_t_same_prim", "examples" (up to `examples` ray indices per class),
+    "unexplained_rays" (details of up to `examples` unexplained rays, faulted ones included) and "faults"
+    (model rays per fault code; they are counted in "unexplained" too)."""
+    c = _compare(tris, rays, golden_hits, model_hits)
+    D, cls, rem, fault_d = c["D"], c["cls"], c["rem"], c["fault_d"]
+    gp, mp, gt, mt, g_hit, m_hit = c["gp"], c["mp"], c["gt"], c["mt"], c["g_hit"], c["m_hit"]
+    bg, bm, tm64 = c["bg"], c["bm"], c["tm64"]
+    counts = {k: int(np.sum(cls == k)) for k in CLASSES}
+    unexplained = np.nonzero(rem | fault_d)[0]
     details = []
     for i in unexplained[:examples]:
         ray = int(D[i])
@@ -228,15 +266,16 @@ def classify(tris, rays, golden_hits, model_hits, examples=10) -> dict:
             "model_prim_t64": _f(tm64[i]) if m_hit[i] else None,
         })
     return {
-        "rays": int(n),
-        "agree": int(np.sum(agree)),
+        "rays": int(c["n"]),
+        "agree": int(np.sum(c["agree"])),
         "classified": counts,
         "unexplained": int(len(unexplained)),
-        "max_rel_t_err": max_rel,
+        "max_rel_t_err": c["max_rel"],
         "disagree": int(len(D)),
-        "nonfinite_t_same_prim": nonfinite,
-        "examples": {c: [int(D[i]) for i in np.nonzero(cls == c)[0][:examples]] for c in CLASSES},
+        "nonfinite_t_same_prim": c["nonfinite"],
+        "examples": {k: [int(D[i]) for i in np.nonzero(cls == k)[0][:examples]] for k in CLASSES},
         "unexplained_rays": details,
+        "faults": {k: int(np.sum(mp == code)) for k, code in FAULT_CODES.items()},
     }
 
 
@@ -246,12 +285,15 @@ def _f(x):
 
 
 def summary_text(res: dict) -> str:
-    c = res["classified"]
+    c, f = res["classified"], res["faults"]
     lines = [f"rays {res['rays']}: agree {res['agree']}, disagree {res['disagree']} "
              f"(tie {c['tie']}, edge {c['edge']}, grazing {c['grazing']}, degenerate {c['degenerate']}), "
-             f"unexplained {res['unexplained']}; max rel t err (same prim) {res['max_rel_t_err']:.3g}"]
+             f"unexplained {res['unexplained']} (of which model faults: read error {f['read_error']}, "
+             f"stack overflow {f['overflow']}); max rel t err (same prim) {res['max_rel_t_err']:.3g}"]
     for u in res["unexplained_rays"]:
-        lines.append(f"  unexplained ray {u['ray']}: o={u['origin']} d={u['dir']} golden={u['golden']} "
+        fault = FAULT_LABELS.get(u["model"]["prim"])
+        lines.append(f"  unexplained ray {u['ray']}{f' (model fault: {fault})' if fault else ''}: "
+                     f"o={u['origin']} d={u['dir']} golden={u['golden']} "
                      f"model={u['model']} golden_bary64={u['golden_prim_bary64']} "
                      f"model_bary64={u['model_prim_bary64']} model_t64={u['model_prim_t64']}")
     return "\n".join(lines)
@@ -262,7 +304,8 @@ def main(argv=None):
     ap.add_argument("--tris", required=True, help="float32 (T,3,3) triangles (python -m scenes.export)")
     ap.add_argument("--golden", required=True, help="golden directory with rays.npy and hits.npy")
     ap.add_argument("--hits", required=True, help="model hits, same dtype as golden hits, same ray order")
-    ap.add_argument("--fail-on-unexplained", action="store_true", help="exit 1 if any ray is unexplained")
+    ap.add_argument("--report-only", action="store_true",
+                    help="exit 0 even when rays are unexplained (default: exit 3, 'ran, but a check failed')")
     a = ap.parse_args(argv)
     if not os.path.isdir(a.golden):
         raise GoldenError(f"--golden {a.golden} is not a directory; run python -m golden.export first")
@@ -273,7 +316,8 @@ def main(argv=None):
     res = classify(tris, rays, golden, model)
     print(summary_text(res), file=sys.stderr)
     print(json.dumps(res))
-    return 1 if (a.fail_on_unexplained and res["unexplained"]) else 0
+    # A check is an exit status: the JSON line stays the last line either way.
+    return CHECK_FAILED if (res["unexplained"] and not a.report_only) else 0
 
 
 if __name__ == "__main__":

@@ -8,6 +8,12 @@ from scenes.errors import UserError
 
 RAY_COLUMNS = ("ox", "oy", "oz", "dx", "dy", "dz", "tmin", "tmax")
 HIT_DTYPE = np.dtype([("t", "<f4"), ("prim", "<i4"), ("u", "<f4"), ("v", "<f4")])
+# Negative prim codes of a hit record (t = +inf for all three). The faults come from the model/RTL only: the ray
+# has no result, so it must neither look like a miss nor be dropped.
+PRIM_MISS = -1
+PRIM_READ_ERROR = -2   # a memory read of the ray's traversal failed
+PRIM_OVERFLOW = -3     # the ray's traversal stack overflowed
+FAULT_CODES = {"read_error": PRIM_READ_ERROR, "overflow": PRIM_OVERFLOW}
 
 
 class GoldenError(UserError):
@@ -54,7 +60,7 @@ def load_rays(path: str) -> np.ndarray:
 
 
 def check_hits(hits, n=None, where="hits"):
-    """Validate a hits array: structured dtype HIT_DTYPE, 1-D, prim >= -1, optional ray count n."""
+    """Validate a hits array: structured dtype HIT_DTYPE, 1-D, prim >= PRIM_OVERFLOW, optional ray count n."""
     if not isinstance(hits, np.ndarray) or hits.dtype != HIT_DTYPE:
         raise GoldenError(f"{where}: dtype must be {HIT_DTYPE.descr} (t,prim,u,v), got "
                           f"{getattr(hits, 'dtype', type(hits))}; save hits with that structured dtype")
@@ -63,8 +69,10 @@ def check_hits(hits, n=None, where="hits"):
     if n is not None and len(hits) != n:
         raise GoldenError(f"{where}: has {len(hits)} records but there are {n} rays; hits must follow the ray "
                           f"order one to one")
-    if len(hits) and hits["prim"].min() < -1:
-        raise GoldenError(f"{where}: prim below -1 (ray {int(np.argmin(hits['prim']))}); use -1 for a miss")
+    if len(hits) and hits["prim"].min() < PRIM_OVERFLOW:
+        i = int(np.nonzero(hits["prim"] < PRIM_OVERFLOW)[0][0])
+        raise GoldenError(f"{where}: prim {int(hits['prim'][i])} below {PRIM_OVERFLOW} (ray {i}); use -1 for a miss, "
+                          f"-2 for a memory read error, -3 for a stack overflow")
     return hits
 
 

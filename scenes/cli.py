@@ -9,6 +9,8 @@ from contextlib import contextmanager
 from .errors import UserError
 
 EXIT_USER_ERROR = 2
+# "ran, but a check failed": the run's outputs and JSON line exist, but are not a result to use.
+EXIT_CHECK_FAILED = 3
 
 
 def _umask() -> int:

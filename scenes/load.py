@@ -26,6 +26,7 @@ from .errors import SceneError
 SUPPORTED_EXTENSIONS = (".obj", ".ply")
 
 _FACE_LINE = re.compile(r"^f[ \t]+([^\n]*)$", re.MULTILINE)
+_VERTEX_LINE = re.compile(r"^[ \t]*v[ \t]", re.MULTILINE)
 _COMMENT_OR_MTL_LINE = re.compile(r"^[ \t]*(?:#|usemtl\b|mtllib\b)[^\n]*$", re.MULTILINE)
 # A face-vertex token whose position index is 0 or negative ("0", "-3", "-3/1/2"), at the start of a token.
 _BAD_INDEX = re.compile(r"(?:^|(?<=[ \t]))(0+|-\d+)(?=[/ \t]|$)", re.MULTILINE)
@@ -96,6 +97,9 @@ def _load_obj(path: str):
     text, expected = _prepare_obj_text(path, text)
     if expected == 0:
         raise SceneError(f"{path}: OBJ has no faces ('f' lines); a scene needs at least one triangle")
+    if not _VERTEX_LINE.search(text):  # trimesh would return an empty scene: "no triangles" would mislead
+        raise SceneError(f"{path}: OBJ has face lines but no vertex ('v') lines, so every face index is out of "
+                         f"range; fix or re-export the file")
     try:
         res = trimesh.load(io.BytesIO(text.encode("utf-8")), file_type="obj", process=False, validate=False,
                            maintain_order=True, group_material=False, skip_materials=True)

@@ -4,7 +4,9 @@ Speaks the entry points' contract: `--key value` arguments, CacheSim's last stdo
 --sweep-out writes the miss-rate CSV), SweepTus writes OUT/tus_sweep.csv. The numbers are simple functions
 of MPPL and the cache sizes so the tests can predict every output cell. FAKE_JAVA_MODE=refuse makes it fail
 like an entry point refusing input (one `error:` line, status 2); crash = a JVM exception (status 1);
-nocache = a SweepTus built before the RTL cache (ignores --node-cache).
+nocache = a SweepTus built before the RTL cache (ignores --node-cache); check-fails = the run completes but a
+check of its own fails (JSON line with "ok": false and "failures", `error: check failed` line, status 3), for
+every entry point, or only for SweepTus with check-fails-tus; check-fails-nojson = status 3 without that line.
 """
 import json
 import os
@@ -72,6 +74,15 @@ def main():
     if mode == "refuse":
         print("error: MPPL 4 does not fit the 2-bit leaf count field", file=sys.stderr)
         sys.exit(2)
+    if mode == "check-fails" or (mode == "check-fails-tus" and main_class == "rtaccel.cli.SweepTus"):
+        failures = ["mismatch_vs_model=3", "lost=1"]
+        print("some log line")
+        print(json.dumps({"scene": a.get("scene-label"), "rtaccel": "fake-1", "ok": False, "failures": failures}))
+        print(f"error: check failed: {', '.join(failures)}", file=sys.stderr)
+        sys.exit(3)
+    if mode == "check-fails-nojson":
+        print("error: check failed: lost=1", file=sys.stderr)
+        sys.exit(3)
     if mode == "crash":
         print('Exception in thread "main" java.lang.OutOfMemoryError: Java heap space\n\tat rtaccel.X', file=sys.stderr)
         sys.exit(1)

@@ -58,3 +58,33 @@ def test_refuses_mismatched_runs(tmp_path):
 def test_refuses_empty_dir(tmp_path):
     with pytest.raises(SystemExit, match="error: no sim-tuN.json"):
         bench_caches.main(str(tmp_path / "b.csv"), "s", str(tmp_path))
+
+
+@pytest.mark.parametrize("name", ["sim-tu1.json", "model-tu1.json"])
+def test_refuses_a_run_whose_check_failed(tmp_path, capsys, name):
+    runs = {"sim-tu1.json": sim(1, 50, 950, 3_000_000, 12.0), "model-tu1.json": model(1, 50, 950, 0.002, 0.05)}
+    runs[name].update(ok=False, failures=["mismatch_vs_model=2", "lost=1"])
+    for n, j in runs.items():
+        write(tmp_path, n, j)
+    with pytest.raises(SystemExit) as e:
+        bench_caches.main(str(tmp_path / "b.csv"), "s", str(tmp_path))
+    assert e.value.code == 3
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"error: {tmp_path / name}: the run's check failed "
+                                                f"(mismatch_vs_model=2, lost=1)")
+    assert not (tmp_path / "b.csv").exists()
+
+
+def test_cli_check_failure_is_exit_3_and_ok_true_passes(tmp_path):
+    from scenes.tests.helpers import run_cli
+
+    s = sim(1, 50, 950, 3_000_000, 12.0)
+    write(tmp_path, "sim-tu1.json", {**s, "ok": True, "failures": []})
+    write(tmp_path, "model-tu1.json", model(1, 50, 950, 0.002, 0.05))
+    r = run_cli("dse.bench_caches", str(tmp_path / "b.csv"), "s", str(tmp_path))
+    assert r.returncode == 0, r.stderr
+    (tmp_path / "b.csv").unlink()
+    write(tmp_path, "sim-tu1.json", {**s, "ok": False, "failures": ["lost=4"]})
+    r = run_cli("dse.bench_caches", str(tmp_path / "b.csv"), "s", str(tmp_path))
+    assert r.returncode == 3 and r.stderr.count("\n") == 1 and "check failed (lost=4)" in r.stderr
+    assert not (tmp_path / "b.csv").exists() and r.stdout == ""

@@ -169,6 +169,37 @@ def test_jvm_failure_is_one_line_and_writes_nothing(inputs, monkeypatch, mode, s
     assert os.listdir(t / "out") == []  # the scratch sweep file is gone too
 
 
+def test_jvm_check_failure_names_its_failures_and_writes_nothing(inputs, monkeypatch):
+    t = inputs
+    monkeypatch.setenv("FAKE_JAVA_MODE", "check-fails")
+    r = drive(t)
+    assert r.returncode == 3
+    line = one_error_line(r)
+    assert "Fig 11 sweep, MPPL=4: rtaccel.cli.CacheSim check failed: mismatch_vs_model=3, lost=1" in line
+    assert len(java_runs(t)) == 1  # the driver stopped at the first failed check
+    assert os.listdir(t / "out") == []
+
+
+def test_tus_check_failure_plots_nothing_for_it(inputs, monkeypatch):
+    t = inputs
+    monkeypatch.setenv("FAKE_JAVA_MODE", "check-fails-tus")
+    r = drive(t, "--mppl-list", "4", "--tus-list", "1,8")
+    assert r.returncode == 3
+    assert "Figs 12-13 sweep: rtaccel.cli.SweepTus check failed: mismatch_vs_model=3, lost=1" in one_error_line(r)
+    out = sorted(os.listdir(t / "out"))
+    assert "tus_sweep.csv" not in out and "fig12_13_tus.png" not in out and "fig11_miss_rate.png" in out
+    assert not [f for f in out if f.startswith(".tmp")]
+
+
+def test_status_3_without_a_json_line_is_a_broken_contract(inputs, monkeypatch):
+    t = inputs
+    monkeypatch.setenv("FAKE_JAVA_MODE", "check-fails-nojson")
+    r = drive(t)
+    assert r.returncode == 1
+    assert "exited with status 3 (check failed) but no line starts with '{'" in one_error_line(r)
+    assert os.listdir(t / "out") == []
+
+
 SCENE_A = SWEEP.replace("config,", "# scene=/s/a.obj rays=9 config=fit rtaccel=v1\nconfig,", 1)
 BYTES = """# scene=/s/a.obj rays=9 config=fit M=4 rtaccel=v1
 mppl,variant,node_bytes_per_ray,prim_bytes_per_ray,dram_bytes_per_ray,node_miss_rate,prim_miss_rate

@@ -3,8 +3,8 @@ import json
 import numpy as np
 import pytest
 
-from golden.check import classify
-from golden.io import HIT_DTYPE, GoldenError, miss_hits
+from golden.check import CLASSES, classify, ray_classes, summary_text
+from golden.io import HIT_DTYPE, GoldenError, check_hits, miss_hits
 from scenes.tests.helpers import run_cli
 
 # 0, 1: unit square z=1 split along its diagonal x=y; 2: duplicate of 0; 3: zero-area (collinear) at y=5;
@@ -72,6 +72,67 @@ def test_each_class_and_agree_rules():
     assert res["max_rel_t_err"] == pytest.approx(0.001 / 1.001, rel=1e-4)
 
 
+def test_ray_classes_match_classify():
+    rays, g, m = _arrays()
+    per = ray_classes(TRIS, rays, g, m)
+    assert list(per) == [c[4] for c in CASES]
+    res = classify(TRIS, rays, g, m)
+    assert sum(per == "agree") == res["agree"] and sum(per == "unexplained") == res["unexplained"]
+    assert {k: int(sum(per == k)) for k in CLASSES} == res["classified"]
+
+
+# Rays that would agree (0), be an edge case (6), degenerate (5) or a plain miss (12) but the model faulted on.
+FAULTED = ((0, -2), (6, -3), (5, -2), (12, -3), (2, -2))
+
+
+def _faulted():
+    rays, g, m = _arrays()
+    for i, code in FAULTED:
+        m[i]["prim"], m[i]["t"] = code, np.inf
+    return rays, g, m
+
+
+def test_faults_never_agree_and_count_as_unexplained():
+    rays, g, m = _faulted()
+    res = classify(TRIS, rays, g, m)
+    base = classify(TRIS, *_arrays())
+    assert res["faults"] == {"read_error": 3, "overflow": 2}
+    faulted = {i for i, _ in FAULTED}
+    expect = [("fault" if i in faulted else c[4]) for i, c in enumerate(CASES)]
+    assert res["agree"] == expect.count("agree") == base["agree"] - 2
+    for cls in CLASSES:
+        assert res["examples"][cls] == [i for i, e in enumerate(expect) if e == cls], cls
+    want = sorted(faulted | {i for i, e in enumerate(expect) if e == "unexplained"})
+    assert res["unexplained"] == len(want) == expect.count("unexplained") + len(FAULTED)
+    assert [u["ray"] for u in res["unexplained_rays"]] == want
+    assert list(res) == list(base) == ["rays", "agree", "classified", "unexplained", "max_rel_t_err", "disagree",
+                                       "nonfinite_t_same_prim", "examples", "unexplained_rays", "faults"]
+    assert base["faults"] == {"read_error": 0, "overflow": 0}
+    per = ray_classes(TRIS, rays, g, m)
+    assert [per[i] for i, _ in FAULTED] == ["read_error", "overflow", "read_error", "overflow", "read_error"]
+    text = summary_text(res)
+    assert "model faults: read error 3, stack overflow 2" in text.splitlines()[0]
+    assert "unexplained ray 6 (model fault: stack overflow)" in text
+    assert "unexplained ray 13: " in text  # a wrong prim is not called a fault
+
+
+def test_hits_fault_codes_accepted_below_refused():
+    h = miss_hits(4)
+    h["prim"] = [-1, -2, -3, 0]
+    assert check_hits(h) is h
+    h["prim"][2] = -4
+    with pytest.raises(GoldenError, match=r"prim -4 below -3 \(ray 2\); use -1 for a miss, -2 for a memory read "
+                                          r"error, -3 for a stack overflow"):
+        check_hits(h)
+
+
+def test_golden_with_fault_codes_refused():
+    rays, g, m = _arrays()
+    g[3]["prim"] = -3
+    with pytest.raises(GoldenError, match="golden hits: ray 3 has fault code -3"):
+        classify(TRIS, rays, g, m)
+
+
 def test_identical_hits_all_agree():
     rays, g, _ = _arrays()
     res = classify(TRIS, rays, g, g.copy())
@@ -102,12 +163,12 @@ def test_cli_json_last_line_and_errors(tmp_path):
     args = ["golden.check", "--tris", str(tmp_path / "tris.npy"), "--golden", str(tmp_path / "gold"),
             "--hits", str(tmp_path / "model.npy")]
     r = run_cli(*args)
-    assert r.returncode == 0, r.stderr
+    assert r.returncode == 3, r.stderr  # unexplained rays: ran, but the check failed
+    assert run_cli(*args, "--report-only").returncode == 0
     out = json.loads(r.stdout.strip().splitlines()[-1])
     assert list(out)[:6] == ["rays", "agree", "classified", "unexplained", "max_rel_t_err", "disagree"] or \
         list(out)[:5] == ["rays", "agree", "classified", "unexplained", "max_rel_t_err"]
     assert out["unexplained"] == [c[4] for c in CASES].count("unexplained") > 0 and "unexplained ray" in r.stderr
-    assert run_cli(*args, "--fail-on-unexplained").returncode == 1
     np.save(tmp_path / "short.npy", m[:-2])
     np.save(tmp_path / "wrong.npy", np.zeros((len(m), 4), np.float32))
     for bad in ("short.npy", "wrong.npy", "missing.npy"):
@@ -115,3 +176,21 @@ def test_cli_json_last_line_and_errors(tmp_path):
         assert r.returncode == 2, bad
         lines = r.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("error: ") and r.stdout == ""
+
+
+def test_cli_reports_faults(tmp_path):
+    rays, g, m = _faulted()
+    (tmp_path / "gold").mkdir()
+    np.save(tmp_path / "gold" / "rays.npy", rays)
+    np.save(tmp_path / "gold" / "hits.npy", g)
+    np.save(tmp_path / "tris.npy", TRIS)
+    only = g.copy()  # faults alone must fail the check too
+    only[0]["prim"] = -2
+    only[0]["t"] = np.inf
+    np.save(tmp_path / "model.npy", only)
+    r = run_cli("golden.check", "--tris", str(tmp_path / "tris.npy"), "--golden", str(tmp_path / "gold"),
+                "--hits", str(tmp_path / "model.npy"))
+    assert r.returncode == 3, r.stderr
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert out["faults"] == {"read_error": 1, "overflow": 0} and out["unexplained"] == 1
+    assert out["agree"] == len(rays) - 1 and "model fault: read error" in r.stderr

@@ -13,8 +13,8 @@ import rtaccel.mc.AxiParams
 import rtaccel.cache.hw.CachePath
 import rtaccel.model.{AccessRecorder, AccessSink, MemFaults, RayStats, Traversal}
 import rtaccel.scene.{Hits, Rays}
-import rtaccel.sim.{DramConfig, ImageFile, RaysFile, SimHarness, SimSetup}
-import rtaccel.top.{RegMap, RtAccelTop}
+import rtaccel.sim.{DramConfig, HostDriver, HostSession, ImageFile, RaysFile, SimHarness, SimSetup}
+import rtaccel.top.RtAccelTop
 
 /** make simulate: the platform RTL (Verilator) on a rays file, checked ray by ray against the reference
   * model; writes OUT/hits.npy and prints the metrics JSON as the last line.
@@ -43,7 +43,10 @@ object Simulate {
   def failures(j: ujson.Obj): Seq[String] = Seq(
     "mismatch_vs_model" -> (j("mismatch_vs_model").num > 0), "lost" -> (j("lost").num > 0),
     "duplicated" -> (j("duplicated").num > 0), "timeout" -> j("timed_out").bool,
-    "overflow_vs_model" -> (j("overflow_disagreements").num > 0), "read_errors_vs_model" -> (j("read_error_disagreements").num > 0),
+    "overflow_vs_model" -> (j("overflow_disagreements").num > 0),
+    "status_done" -> !j("status")("done").bool,
+    "status_read_error" -> (j("status")("read_error").bool != (j("read_errors").num > 0)),
+    "status_overflow" -> (j("status")("overflow").bool != (j("overflowed").num > 0)), "read_errors_vs_model" -> (j("read_error_disagreements").num > 0),
     // null when there is no cache to compare
     "cache_counts_match_model" -> (j("cache_counts_match_model") == ujson.False)).collect { case (n, true) => n }
 
@@ -105,26 +108,29 @@ object Simulate {
     RawTester.test(new SimHarness(p, setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
       VerilatorCFlags(Seq("-O1")), CachingAnnotation)) { dut =>
       dut.clock.setTimeout(0)
-      dut.io.rayCount.poke(rays.count.U)
-      dut.io.primBase.poke(layout.primBaseBytes.U)
-      dut.io.maxLevel.poke(p.nodeCache.maxLevel.U) // MAX_LEVEL is a runtime register, not part of the circuit
-      dut.io.readIdx.poke(0.U); dut.io.regAddr.poke(0.U)
+      dut.io.readIdx.poke(0.U)
+      dut.io.rayCount.poke(rays.count.U) // what the host's stream holds
+      // The host driver's sequence (docs/registers.md, "Driver contract"): the image is in DRAM already.
+      val host = new HostDriver(dut.io.lite, dut.clock)
+      host.idle()
+      val regs = HostSession.configure(host, p, layout.primBaseBytes, rays.count)
       val tSim = System.nanoTime()
       var stepped = 0L
       val chunk = 20000
-      var received = 0L
       var lastReport = System.nanoTime()
-      while (received < rays.count && stepped < maxCycles) {
+      while (!dut.io.irq.peek().litToBoolean && stepped < maxCycles) {
         dut.clock.step(chunk); stepped += chunk
-        received = dut.io.received.peek().litValue.toLong
         if (System.nanoTime() - lastReport > 5e9) {
-          System.err.println(f"[simulate] ${stepped / 1e6}%.1fM cycles, $received/${rays.count} hits"); lastReport = System.nanoTime()
+          System.err.println(f"[simulate] ${stepped / 1e6}%.1fM cycles, ${dut.io.received.peek().litValue}/${rays.count} hits")
+          lastReport = System.nanoTime()
         }
       }
+      dut.clock.step(256) // a hit beyond the batch would show up here as a duplicate
       val simWall = (System.nanoTime() - tSim) / 1e9
-      val cycles = dut.io.doneCycle.peek().litValue.toLong
-      def reg(i: Int): Long = { dut.io.regAddr.poke(i.U); dut.io.regData.peek().litValue.toLong }
-      val counters = RtAccelTop.counterNames.zipWithIndex.map { case (n, i) => n -> reg(RegMap.Counters + i) }.toMap
+      val received = dut.io.received.peek().litValue.toLong
+      val finish = HostSession.finish(host)
+      val counters = finish.counters
+      val cycles = counters("batch_cycles")
       // results, by ray id
       val hits = Hits.empty(rays.count)
       val seen = new Array[Int](rays.count)
@@ -176,9 +182,10 @@ object Simulate {
         "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
         "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,
-        "timed_out" -> (received < rays.count), "normalize_exponent" -> o.scaleExp,
+        "timed_out" -> (received < rays.count || !finish.irqDone), "normalize_exponent" -> o.scaleExp,
         "mem_jitter" -> dram.randomExtraLatency, "host_stall_percent" -> setup.hostStallPercent,
         "counters" -> ujson.Obj.from(counters.map { case (k, v) => k -> ujson.Num(v.toDouble) }),
+        "status" -> finish.statusJson, "irq_done" -> finish.irqDone,
         "dram_bytes_per_ray" -> counters("mem_busy_beats") * axi.beatBytes / n,
         "node_cache" -> cacheJson.node, "prim_cache" -> cacheJson.prim, "cache_counts_match_model" -> cacheJson.matches,
         "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> Cli.version)

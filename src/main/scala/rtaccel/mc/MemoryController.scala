@@ -83,6 +83,7 @@ class FetchPathIO(g: McGeometry) extends Bundle {
   val in = Flipped(Decoupled(g.pathReq))
   val primBase = Input(UInt(g.axi.addrBits.W))
   val maxLevel = Input(UInt(4.W))
+  val clearStats = Input(Bool()) // the host's CLEAR_COUNTERS
   val stats = Output(new PathStats)
   val memReq = Decoupled(g.memReq)
   val memResp = Flipped(Decoupled(new FetchBeat(g.axi.dataBits)))
@@ -186,6 +187,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     val resp = Decoupled(new FetchBeat(ap.dataBits))
     val primBase = Input(UInt(ap.addrBits.W))
     val maxLevel = Input(UInt(4.W)) // MAX_LEVEL register of the level replacement policy
+    val clearCounters = Input(Bool()) // zeroes the counters below and every path's cache statistics
     val axi = new AxiReadMaster(ap)
     val counters = Output(new McCounters)
   })
@@ -229,6 +231,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
     path.io.in.bits.level := (if (i == NodePath) nodeLevel else 0.U)
     path.io.primBase := io.primBase
     path.io.maxLevel := io.maxLevel
+    path.io.clearStats := io.clearCounters
   }
   io.counters.nodeCache := paths(NodePath).io.stats
   io.counters.primCache := paths(PrimPath).io.stats
@@ -291,7 +294,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
   // ---- counters
   def counter(inc: UInt, en: Bool): UInt = {
     val c = RegInit(0.U(48.W))
-    when(en) { c := c + inc }
+    when(io.clearCounters) { c := 0.U }.elsewhen(en) { c := c + inc }
     c
   }
   val reqFire = io.req.fire

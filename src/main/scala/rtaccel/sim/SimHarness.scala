@@ -5,7 +5,7 @@ import chisel3.util._
 import chisel3.util.experimental.loadMemoryFromFileInline
 import chisel3.util.random.LFSR
 import rtaccel.config.PlatformParams
-import rtaccel.top.{RegMap, RtAccelTop}
+import rtaccel.top.{AxiLite, RtAccelTop}
 
 /** What a simulation build needs besides the platform parameters. Capacities are powers of two and the
   * files live at fixed names in one folder, so that scenes of similar size reuse a compiled simulator; the
@@ -23,46 +23,38 @@ object SimSetup {
   def pow2(n: Long): Int = { var c = 1L; while (c < n) c <<= 1; require(c <= (1 << 30), s"$n entries is too large to simulate"); c.toInt }
 }
 
-/** Simulation-only wrapper: the board top with the rays in a ROM, the memory image in a DRAM model and the
-  * hits captured in a RAM, so that a whole scene runs without per-cycle work in Scala. The host side can
-  * refuse hits at random (backpressure). Results are read out through `readIdx`/`readData` at the end.
+/** Simulation-only wrapper: the board top with the rays in a ROM (the host's ray stream), the memory image in a
+  * DRAM model (loaded by the host before the run) and the hits captured in a RAM (the host's hit stream), so
+  * that a whole scene runs without per-cycle work in Scala. The host side can refuse hits at random
+  * (backpressure). Everything else goes through the board's AXI4-Lite port, `lite`, which the host driver
+  * (HostDriver) works from outside in the order docs/registers.md gives; `irq` is the board's interrupt.
+  * Results are read out through `readIdx`/`readData` at the end.
   * With accessLogCapacity > 0 every child reference the MC accepts is logged in order (`logCount`, read out
   * through `readIdx`/`logData`): the access order the caches saw, for replay through the trace model.
-  * The host writes PRIM_BASE and then MAX_LEVEL (from the inputs) before the first ray.
   */
 class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
+  val top = Module(new RtAccelTop(p, tapAccesses = s.accessLogCapacity > 0))
   val io = IO(new Bundle {
-    val rayCount = Input(UInt(32.W))
-    val primBase = Input(UInt(64.W))
-    val maxLevel = Input(UInt(4.W))
+    val lite = Flipped(new AxiLite(top.io.lite.addrBits))
+    val irq = Output(Bool())
+    val rayCount = Input(UInt(32.W)) // rays the host streams (RAY_COUNT of the batch)
     val received = Output(UInt(32.W))
     val sent = Output(UInt(32.W))
-    val doneCycle = Output(UInt(64.W)) // cycles until the last hit arrived (counting stops there)
     val readIdx = Input(UInt(32.W))
     val readData = Output(UInt(RtAccelTop.HitBits.W))
-    val regAddr = Input(UInt(8.W))
-    val regData = Output(UInt(64.W))
     val logCount = Output(UInt(32.W))
     val logData = Output(UInt(32.W))
   })
-  val top = Module(new RtAccelTop(p, tapAccesses = s.accessLogCapacity > 0))
   val dram = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, s.dram))
   dram.io.axi <> top.io.mem
+  top.io.lite <> io.lite
+  io.irq := top.io.irq
 
-  // two register writes, one per cycle, then rays flow
-  val setupStep = RegInit(0.U(2.W))
-  val started = setupStep === 2.U
-  when(!started) { setupStep := setupStep + 1.U }
-  top.io.regs.wr.valid := !started
-  top.io.regs.wr.bits.addr := Mux(setupStep === 0.U, RegMap.PrimBase.U, RegMap.MaxLevel.U)
-  top.io.regs.wr.bits.data := Mux(setupStep === 0.U, io.primBase, io.maxLevel.pad(64))
-  top.io.regs.rdAddr := io.regAddr
-  io.regData := top.io.regs.rdData
-
+  // the host's ray stream: the board takes rays only within a started batch
   val rays = Mem(s.rayCapacity, UInt(RtAccelTop.RayBits.W))
   loadMemoryFromFileInline(rays, s.raysHex)
   val sent = RegInit(0.U(32.W))
-  top.io.rays.valid := started && sent < io.rayCount
+  top.io.rays.valid := sent < io.rayCount
   top.io.rays.bits.tdata := rays(sent)
   top.io.rays.bits.tlast := sent === io.rayCount - 1.U
   when(top.io.rays.fire) { sent := sent + 1.U }
@@ -76,9 +68,6 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     when(received < io.rayCount) { hits(received) := top.io.hits.bits.tdata }
     received := received + 1.U
   }
-  val cycle = RegInit(0.U(64.W))
-  when(received < io.rayCount) { cycle := cycle + 1.U }
-  io.doneCycle := cycle
   io.received := received
   io.sent := sent
   io.readData := hits(io.readIdx)

@@ -3,43 +3,138 @@ package rtaccel.top
 import chisel3._
 import chisel3.util._
 
-/** Register port of the board top: word-addressed 64-bit registers, one write and one read port. */
-class RegPort extends Bundle {
-  val wr = Flipped(Valid(new Bundle { val addr = UInt(8.W); val data = UInt(64.W) }))
-  val rdAddr = Input(UInt(8.W))
-  val rdData = Output(UInt(64.W))
+/** AXI4-Lite, 32-bit data, master's view (the board top's port is Flipped). */
+class AxiLite(val addrBits: Int) extends Bundle {
+  val aw = Decoupled(new Bundle { val addr = UInt(addrBits.W) })
+  val w = Decoupled(new Bundle { val data = UInt(32.W); val strb = UInt(4.W) })
+  val b = Flipped(Decoupled(new Bundle { val resp = UInt(2.W) }))
+  val ar = Decoupled(new Bundle { val addr = UInt(addrBits.W) })
+  val r = Flipped(Decoupled(new Bundle { val data = UInt(32.W); val resp = UInt(2.W) }))
 }
 
-/** Register map (also in docs/platform.md):
-  *  0x00 magic "RTAC" + version   0x01 configuration (M, max primitives per leaf, TUs, stack depth)   0x02 primitive base (RW)
-  *  0x03 control (RW, bit 0 clears the counters)   0x04 MAX_LEVEL of the level replacement policy (RW, 4 bits)
-  *  0x10.. performance counters (read only, 64-bit).
+object AxiLite {
+  val Okay = 0; val SlvErr = 2; val DecErr = 3
+}
+
+/** What the platform tells the register file, per cycle. */
+class RegEvents extends Bundle {
+  val busy = Bool()       // a TU holds a ray or a hit waits for the host
+  val rayIn = Bool()      // a ray was accepted from the stream
+  val hitOut = Bool()     // a hit left on the stream
+  val readError = Bool()  // ... flagged with a memory read error
+  val overflow = Bool()   // ... flagged with a stack overflow
+}
+
+/** The host interface of the board top (RegMap, docs/registers.md): an AXI4-Lite slave with one read and
+  * one write in flight, the batch control (START gates the ray stream until RAY_COUNT rays are in; DONE when
+  * as many hits are out), sticky error status, interrupts and 64-bit counter snapshots.
+  * A write needs AW and W together; a partial write (WSTRB not 0xF) or a write to a read-only register is
+  * answered SLVERR and changes nothing; an unmapped address is answered DECERR (reads return 0).
+  * `constants`: the read-only configuration words, by register.
   */
-object RegMap {
-  val Magic = 0x00; val Config = 0x01; val PrimBase = 0x02; val Control = 0x03; val MaxLevel = 0x04; val Counters = 0x10
-}
-
-class RegFile(configWord: BigInt, counterNames: Seq[String], addrBits: Int, maxLevelReset: Int = 15) extends Module {
+class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], primBaseBits: Int, maxLevelReset: Int,
+              levelBits: Int) extends Module {
+  private val addrBits = RegMap.addrBits(counterNames)
   val io = IO(new Bundle {
-    val port = new RegPort
-    val primBase = Output(UInt(addrBits.W))
-    val clear = Output(Bool())
-    val maxLevel = Output(UInt(4.W))
+    val lite = Flipped(new AxiLite(addrBits))
+    val irq = Output(Bool())
+    val events = Input(new RegEvents)
     val counters = Input(Vec(counterNames.length, UInt(64.W)))
+    val acceptRays = Output(Bool())  // the ray stream may deliver (a batch is running and not yet full)
+    val running = Output(Bool())     // a batch is running (START .. DONE)
+    val clearCounters = Output(Bool())
+    val primBase = Output(UInt(primBaseBits.W))
+    val maxLevel = Output(UInt(levelBits.W))
   })
-  val primBase = RegInit(0.U(addrBits.W)) // as wide as a memory address
-  val control = RegInit(0.U(64.W))
-  val maxLevel = RegInit(maxLevelReset.U(4.W))
-  when(io.port.wr.valid) {
-    when(io.port.wr.bits.addr === RegMap.PrimBase.U) { primBase := io.port.wr.bits.data(addrBits - 1, 0) }
-    when(io.port.wr.bits.addr === RegMap.Control.U) { control := io.port.wr.bits.data }
-    when(io.port.wr.bits.addr === RegMap.MaxLevel.U) { maxLevel := io.port.wr.bits.data(3, 0) }
+  import RegMap._
+  private def bit(r: Reg, f: String): Int = r.fields.find(_.name == f).get.lsb
+
+  // ---- state
+  val rayCount = RegInit(0.U(32.W))
+  val primBase = RegInit(0.U(64.W))
+  val maxLevel = RegInit(maxLevelReset.U(levelBits.W))
+  val irqEnable = RegInit(0.U(2.W))
+  val irqStatus = RegInit(0.U(2.W))
+  val running = RegInit(false.B)
+  val done = RegInit(false.B)
+  val stickyReadError = RegInit(false.B)
+  val stickyOverflow = RegInit(false.B)
+  val raysIn = RegInit(0.U(32.W))
+  val hitsDone = RegInit(0.U(32.W))
+
+  // ---- write channel: AW and W accepted together, then B
+  val bValid = RegInit(false.B); val bResp = RegInit(0.U(2.W))
+  val wFire = io.lite.aw.valid && io.lite.w.valid && !bValid
+  io.lite.aw.ready := wFire; io.lite.w.ready := wFire
+  io.lite.b.valid := bValid; io.lite.b.bits.resp := bResp
+  when(io.lite.b.fire) { bValid := false.B }
+  val wAddr = io.lite.aw.bits.addr; val wData = io.lite.w.bits.data
+  val fullWord = io.lite.w.bits.strb === "b1111".U
+  private val writable = fixed.filter(r => r.access != RO)
+  private val readOnly = all(counterNames).filter(_.access == RO)
+  val isWritable = writable.map(r => wAddr === r.offset.U).reduce(_ || _)
+  val isReadOnly = readOnly.map(r => wAddr === r.offset.U).reduce(_ || _)
+  def wrote(r: Reg): Bool = wFire && fullWord && wAddr === r.offset.U
+  when(wFire) {
+    bValid := true.B
+    bResp := Mux(isWritable && fullWord, AxiLite.Okay.U, Mux(isWritable || isReadOnly, AxiLite.SlvErr.U, AxiLite.DecErr.U))
   }
-  io.primBase := primBase
-  io.clear := control(0)
+  when(wrote(RayCount)) { rayCount := wData }
+  when(wrote(PrimBaseLo)) { primBase := Cat(primBase(63, 32), wData) }
+  when(wrote(PrimBaseHi)) { primBase := Cat(wData, primBase(31, 0)) }
+  when(wrote(MaxLevel)) { maxLevel := wData(levelBits - 1, 0) }
+  when(wrote(IrqEnable)) { irqEnable := wData(1, 0) }
+  val start = wrote(Control) && wData(bit(Control, "START"))
+  val softReset = wrote(Control) && wData(bit(Control, "SOFT_RESET"))
+  io.clearCounters := (wrote(Control) && wData(bit(Control, "CLEAR_COUNTERS"))) || softReset
+
+  // ---- batch control and status
+  val errorEvent = io.events.hitOut && (io.events.readError || io.events.overflow)
+  when(io.events.rayIn) { raysIn := raysIn + 1.U }
+  when(io.events.hitOut) { hitsDone := hitsDone + 1.U }
+  when(io.events.hitOut && io.events.readError) { stickyReadError := true.B }
+  when(io.events.hitOut && io.events.overflow) { stickyOverflow := true.B }
+  val lastHit = running && io.events.hitOut && hitsDone + 1.U === rayCount
+  val doneNow = lastHit || (start && rayCount === 0.U)
+  when(doneNow) { running := false.B; done := true.B }
+  val irqSet = Cat(errorEvent, doneNow)
+  val irqClear = Mux(wrote(IrqStatus), wData(1, 0), 0.U)
+  irqStatus := (irqStatus & ~irqClear) | irqSet
+  when(start && rayCount =/= 0.U) { running := true.B; done := false.B; raysIn := 0.U; hitsDone := 0.U }
+  when(softReset) {
+    running := false.B; done := false.B; raysIn := 0.U; hitsDone := 0.U
+    stickyReadError := false.B; stickyOverflow := false.B; irqStatus := 0.U
+  }
+  io.acceptRays := running && raysIn < rayCount
+  io.running := running
+  io.irq := (irqStatus & irqEnable).orR
+  io.primBase := primBase(primBaseBits - 1, 0)
   io.maxLevel := maxLevel
-  val table = Seq(RegMap.Magic -> "h5254414300000001".U(64.W), RegMap.Config -> configWord.U(64.W),
-    RegMap.PrimBase -> primBase.pad(64), RegMap.Control -> control, RegMap.MaxLevel -> maxLevel.pad(64)) ++
-    counterNames.indices.map(i => (RegMap.Counters + i) -> io.counters(i))
-  io.port.rdData := MuxLookup(io.port.rdAddr, 0.U(64.W))(table.map { case (a, v) => a.U -> v })
+
+  // ---- read channel: the data is registered with the AR handshake, then R
+  val rValid = RegInit(false.B); val rData = RegInit(0.U(32.W)); val rResp = RegInit(0.U(2.W))
+  io.lite.ar.ready := !rValid
+  io.lite.r.valid := rValid; io.lite.r.bits.data := rData; io.lite.r.bits.resp := rResp
+  when(io.lite.r.fire) { rValid := false.B }
+  val rAddr = io.lite.ar.bits.addr
+  val snap = RegInit(0.U(64.W)); val snapIdx = RegInit(0.U(log2Ceil(counterNames.length + 1).W))
+  val status = Seq("BUSY" -> (running || io.events.busy), "DONE" -> done, "READ_ERROR" -> stickyReadError,
+    "OVERFLOW" -> stickyOverflow, "RUNNING" -> running).map { case (f, v) => v.asUInt << bit(Status, f) }.reduce(_ | _)
+  val table: Seq[(Int, UInt)] = constants.map { case (r, v) => r.offset -> v.U(32.W) } ++ Seq(
+    Id.offset -> Magic.U(32.W), Version.offset -> ((VersionMajor << 16) | VersionMinor).U(32.W),
+    Status.offset -> status, IrqEnable.offset -> irqEnable.pad(32), IrqStatus.offset -> irqStatus.pad(32),
+    MaxLevel.offset -> maxLevel.pad(32), RayCount.offset -> rayCount, PrimBaseLo.offset -> primBase(31, 0),
+    PrimBaseHi.offset -> primBase(63, 32), HitsDone.offset -> hitsDone, RaysIn.offset -> raysIn, Control.offset -> 0.U(32.W)) ++
+    counterNames.indices.flatMap { i =>
+      Seq(CounterBase + 8 * i -> io.counters(i)(31, 0),
+        CounterBase + 8 * i + 4 -> Mux(snapIdx === i.U, snap(63, 32), io.counters(i)(63, 32)))
+    }
+  require(table.map(_._1).distinct.length == table.length, "two registers share an address")
+  val mapped = table.map(t => rAddr === t._1.U).reduce(_ || _)
+  when(io.lite.ar.fire) {
+    rValid := true.B
+    rData := MuxLookup(rAddr, 0.U(32.W))(table.map { case (a, v) => a.U -> v })
+    rResp := Mux(mapped, AxiLite.Okay.U, AxiLite.DecErr.U)
+    for (i <- counterNames.indices) when(rAddr === (CounterBase + 8 * i).U) { snap := io.counters(i); snapIdx := i.U }
+  }
 }

@@ -22,16 +22,35 @@ object RtAccelTop {
   val HitBits = 6 * 32
   /** Counted here, per cycle. */
   val eventNames: Seq[String] = Seq("cycles", "busy_cycles", "rays_in", "hits_out", "stall_iu_arbitration",
-    "stall_memory_request", "stall_memory_data", "stall_host_backpressure", "tu_busy_cycles")
+    "stall_memory_request", "stall_memory_data", "stall_host_backpressure", "tu_busy_cycles", "batch_cycles")
   /** Counted by the memory controller (not cleared by the control register). */
   val memoryNames: Seq[String] = Seq("node_requests", "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats",
     "node_cache_hits", "node_cache_misses", "node_cache_bypasses", "prim_cache_hits", "prim_cache_misses", "prim_cache_bypasses",
     "mem_read_errors")
   val counterNames: Seq[String] = eventNames ++ memoryNames
+
+  /** The read-only configuration registers of RegMap: what a host driver checks before it uploads anything. */
+  def configWords(p: PlatformParams): Seq[(RegMap.Reg, BigInt)] = {
+    import RegMap._
+    def word(r: Reg, vs: (String, Long)*): BigInt = vs.map { case (n, v) =>
+      val f = r.fields.find(_.name == n).getOrElse(throw new IllegalArgumentException(s"${r.name} has no field $n"))
+      require(v >= 0 && v < (1L << f.width), s"${r.name}.$n = $v does not fit its ${f.width} bits")
+      BigInt(v) << f.lsb
+    }.sum
+    def cache(r: Reg, c: rtaccel.config.CacheParams) = word(r, "LOG2_ENTRIES" -> (if (c.entries > 0) log2Ceil(c.entries).toLong else 0L),
+      "PRESENT" -> (if (c.entries > 0) 1L else 0L), "WAYS" -> c.ways.toLong, "POLICY" -> policyCode(c.policy).toLong)
+    Seq(Config0 -> word(Config0, "M" -> p.m, "MAX_LEAF_PRIMS" -> math.min(255, p.refs.maxLeafPrims), "TUS" -> p.tus),
+      Config1 -> word(Config1, "STACK_DEPTH" -> p.stackDepth, "LEVEL_BITS" -> p.refs.levelBits, "COUNT_BITS" -> p.refs.countBits,
+        "NODE_ID_BITS" -> p.refs.nodeIdBits),
+      NodeCache -> cache(NodeCache, p.nodeCache), PrimCache -> cache(PrimCache, p.primCache),
+      Formats -> word(Formats, "NODE_BYTES_LOG2" -> log2Ceil(p.nodeStrideBytes), "PRIM_BYTES_LOG2" -> log2Ceil(p.primStrideBytes),
+        "AXI_DATA_BYTES_LOG2" -> log2Ceil(p.axiDataBits / 8)))
+  }
 }
 
 /** Board top (paper Fig 1, with the PCIe communication controller replaced by AXI4-Stream): rays in, hits
-  * out, an AXI4 read master to onboard memory, and a register port for configuration and counters.
+  * out, an AXI4 read master to onboard memory, and an AXI4-Lite slave with the register map of RegMap
+  * (configuration, control, status, interrupt, counters; docs/registers.md) plus its interrupt line.
   * The node and primitive caches of p.nodeCache / p.primCache sit in the MC (none when entries = 0).
   * tapAccesses (simulation): `tap` shows every child reference the MC accepts, so a harness can log the
   * access order the caches saw and replay it through the trace model.
@@ -42,7 +61,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     val rays = Flipped(Decoupled(new AxisBeat(RtAccelTop.RayBits)))
     val hits = Decoupled(new AxisBeat(RtAccelTop.HitBits))
     val mem = new AxiReadMaster(axiP)
-    val regs = new RegPort
+    val lite = Flipped(new AxiLite(RegMap.addrBits(RtAccelTop.counterNames)))
+    val irq = Output(Bool())
     val tap = if (tapAccesses) Some(Output(Valid(UInt(32.W)))) else None
   })
   val tc = Module(new TraversalController(p))
@@ -53,15 +73,15 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val mc = Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
     respBufferBeats = if (cached) 2 * McGeometry(p, axiP).maxBeats else 0))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
-  val configWord = BigInt(p.m) | (BigInt(p.refs.maxLeafPrims) << 8) | (BigInt(p.tus) << 16) | (BigInt(p.stackDepth) << 32)
-  val regs = Module(new RegFile(configWord, RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel))
-  regs.io.port <> io.regs
+  val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, 4))
+  regs.io.lite <> io.lite
+  io.irq := regs.io.irq
 
   // host stream -> TC
-  tc.io.in.valid := io.rays.valid
+  tc.io.in.valid := io.rays.valid && regs.io.acceptRays
   tc.io.in.bits.id := io.rays.bits.tdata(31, 0)
   for (k <- 0 until 8) tc.io.in.bits.f(k) := io.rays.bits.tdata(32 * k + 63, 32 * k + 32)
-  io.rays.ready := tc.io.in.ready
+  io.rays.ready := tc.io.in.ready && regs.io.acceptRays // rays flow only within a started batch
   io.hits.valid := tc.io.out.valid
   val h = tc.io.out.bits
   io.hits.bits.tdata := Cat(0.U(30.W), h.readError, h.overflow, h.v, h.u, h.prim, h.t, h.id)
@@ -84,13 +104,19 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   io.mem <> mc.io.axi
 
   // counters
-  val perf = Module(new PerfCounters(RtAccelTop.eventNames))
-  perf.io.clear := regs.io.clear
+  val perf = Module(new PerfCounters(RtAccelTop.eventNames, incBits = log2Ceil(p.tus + 1)))
+  perf.io.clear := regs.io.clearCounters
+  mc.io.clearCounters := regs.io.clearCounters
   val tuBusy = tus.map(_.io.busy)
   val anyBusy = tuBusy.reduce(_ || _) || tc.io.out.valid
-  def ev(b: UInt): UInt = 0.U(8.W) | b // widen to the counters' 8-bit increment (works for Bool too)
+  regs.io.events.busy := anyBusy
+  regs.io.events.rayIn := io.rays.fire
+  regs.io.events.hitOut := io.hits.fire
+  regs.io.events.readError := h.readError
+  regs.io.events.overflow := h.overflow
+  def ev(b: UInt): UInt = b.pad(perf.incBits) // PopCount of the TUs fits: incBits covers p.tus
   val events = Map(
-    "cycles" -> 1.U(8.W), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
+    "cycles" -> 1.U, "batch_cycles" -> ev(regs.io.running), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
     "stall_iu_arbitration" -> ev(PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready))),
     "stall_memory_request" -> ev(mc.io.axi.ar.valid && !mc.io.axi.ar.ready),
     "stall_memory_data" -> ev(iu.io.mem.resp.ready && !iu.io.mem.resp.valid),

@@ -55,6 +55,7 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
   io.resp <> mc.io.resp
   mc.io.primBase := io.primBase
   mc.io.maxLevel := io.maxLevel
+  mc.io.clearCounters := false.B
   io.counters := mc.io.counters
   val ars = RegInit(0.U(32.W))
   val maxLen = RegInit(0.U(8.W))

@@ -119,6 +119,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
     when(hit) { hits := hits + 1.U }.otherwise { misses := misses + 1.U }
     when(!hit && !fill) { bypasses := bypasses + 1.U }
   }
+  when(io.clearStats) { hits := 0.U; misses := 0.U; bypasses := 0.U }
   if (isBf) preload() // after the defaults above: its ticket and DRAM read override them while it runs
 
   /** bf: before the first request is served, read nodes 0 .. min(lines, primBase / stride) - 1 into the buffer

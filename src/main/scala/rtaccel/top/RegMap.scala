@@ -1,0 +1,82 @@
+package rtaccel.top
+
+/** The host's view of the board top: the AXI4-Lite register map, defined once here. The RTL (RegFile), the
+  * simulation host driver (sim.HostDriver), the generated C header and Python module (RegHeaders) and
+  * docs/registers.md all follow this table. 32-bit registers at byte offsets; 64-bit counters are two words,
+  * LO then HI: reading LO takes a snapshot of the whole counter, so the HI read that follows matches it.
+  */
+object RegMap {
+  sealed abstract class Access(val code: String)
+  /** read only */
+  case object RO extends Access("RO")
+  /** read/write */
+  case object RW extends Access("RW")
+  /** write-only pulses: each written 1 bit acts once; reads 0 */
+  case object WP extends Access("WP")
+  /** read, write 1 to clear */
+  case object W1C extends Access("W1C")
+
+  final case class Field(name: String, lsb: Int, width: Int, doc: String) {
+    require(lsb >= 0 && width >= 1 && lsb + width <= 32, s"field $name must lie in 32 bits")
+    def mask: Long = ((1L << width) - 1) << lsb
+  }
+  final case class Reg(name: String, offset: Int, access: Access, doc: String, fields: Seq[Field] = Nil) {
+    require(offset % 4 == 0, s"register $name must be word aligned")
+  }
+
+  /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
+  val VersionMajor = 2
+  val VersionMinor = 0
+  val Magic: Long = 0x52544143L // "RTAC"
+
+  val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
+  val Version = Reg("VERSION", 0x004, RO, "register map version", Seq(Field("MINOR", 0, 16, ""), Field("MAJOR", 16, 16, "")))
+  val Config0 = Reg("CONFIG0", 0x008, RO, "generator parameters", Seq(
+    Field("M", 0, 8, "MBVH width"), Field("MAX_LEAF_PRIMS", 8, 8, "primitives a leaf reference can count"),
+    Field("TUS", 16, 16, "traversal units")))
+  val Config1 = Reg("CONFIG1", 0x00C, RO, "traversal stack and reference format", Seq(
+    Field("STACK_DEPTH", 0, 16, "entries per TU stack"), Field("LEVEL_BITS", 16, 4, "level field of a node reference"),
+    Field("COUNT_BITS", 20, 4, "leaf count field"), Field("NODE_ID_BITS", 24, 8, "node id field")))
+  val NodeCache = Reg("NODE_CACHE", 0x010, RO, "node cache geometry", Seq(
+    Field("LOG2_ENTRIES", 0, 5, "log2 of the entries (valid when PRESENT)"), Field("PRESENT", 5, 1, "a node cache is built"),
+    Field("WAYS", 8, 8, "ways"), Field("POLICY", 16, 4, "0 dm, 1 lru, 2 plru, 3 lrp, 4 bf, 5 hybrid")))
+  val PrimCache = Reg("PRIM_CACHE", 0x014, RO, "primitive cache geometry (fields as NODE_CACHE)", NodeCache.fields)
+  val Formats = Reg("FORMATS", 0x018, RO, "arithmetic and memory formats", Seq(
+    Field("BOX_FP", 0, 4, "0 = fp32"), Field("TRI_FP", 4, 4, "0 = fp32"), Field("NODE_BYTES_LOG2", 8, 4, "bytes per node slot"),
+    Field("PRIM_BYTES_LOG2", 12, 4, "bytes per primitive slot"), Field("AXI_DATA_BYTES_LOG2", 16, 4, "memory bus beat")))
+  val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
+    Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,
+      "end the batch and clear status, interrupts and every counter (use only while STATUS.BUSY = 0)"),
+    Field("CLEAR_COUNTERS", 2, 1, "zero every performance counter, MC and caches included")))
+  val Status = Reg("STATUS", 0x024, RO, "state of the platform", Seq(
+    Field("BUSY", 0, 1, "a batch is running or a TU holds a ray"), Field("DONE", 1, 1, "the last batch returned all its hits"),
+    Field("READ_ERROR", 2, 1, "sticky: a ray hit a memory read error (its hit has prim -2)"),
+    Field("OVERFLOW", 3, 1, "sticky: a ray overflowed its stack (its hit has prim -3)"),
+    Field("RUNNING", 4, 1, "accepting rays of the current batch")))
+  val IrqEnable = Reg("IRQ_ENABLE", 0x028, RW, "interrupt enables (irq = IRQ_STATUS & IRQ_ENABLE)", Seq(
+    Field("DONE", 0, 1, "batch done"), Field("ERROR", 1, 1, "a read error or an overflow")))
+  val IrqStatus = Reg("IRQ_STATUS", 0x02C, W1C, "pending interrupts", IrqEnable.fields)
+  val MaxLevel = Reg("MAX_LEVEL", 0x030, RW, "MAX_LEVEL of the level replacement policy", Seq(Field("VALUE", 0, 4, "")))
+  val RayCount = Reg("RAY_COUNT", 0x034, RW, "rays in the next batch")
+  val PrimBaseLo = Reg("PRIM_BASE_LO", 0x038, RW, "byte address of primitive slot 0, low word")
+  val PrimBaseHi = Reg("PRIM_BASE_HI", 0x03C, RW, "byte address of primitive slot 0, high word")
+  val HitsDone = Reg("HITS_DONE", 0x040, RO, "hits returned in the current batch")
+  val RaysIn = Reg("RAYS_IN", 0x044, RO, "rays accepted in the current batch")
+
+  val CounterBase = 0x100
+  /** Counter i is LO at CounterBase + 8 i, HI at + 4. */
+  def counterRegs(names: Seq[String]): Seq[Reg] = names.zipWithIndex.flatMap { case (n, i) =>
+    Seq(Reg(s"CNT_${n.toUpperCase}_LO", CounterBase + 8 * i, RO, s"counter $n, bits 31..0 (reading it snapshots bits 63..32)"),
+      Reg(s"CNT_${n.toUpperCase}_HI", CounterBase + 8 * i + 4, RO, s"counter $n, bits 63..32 of the last LO snapshot"))
+  }
+
+  val fixed: Seq[Reg] = Seq(Id, Version, Config0, Config1, NodeCache, PrimCache, Formats, Control, Status, IrqEnable,
+    IrqStatus, MaxLevel, RayCount, PrimBaseLo, PrimBaseHi, HitsDone, RaysIn)
+  def all(counterNames: Seq[String]): Seq[Reg] = fixed ++ counterRegs(counterNames)
+  /** Address bits of the AXI4-Lite port: the map with every counter fits. */
+  def addrBits(counterNames: Seq[String]): Int = {
+    val end = CounterBase + 8 * counterNames.length
+    math.max(12, 32 - Integer.numberOfLeadingZeros(end - 1))
+  }
+  def policyCode(policy: String): Int = rtaccel.cache.policy.Policies.names.indexOf(policy)
+}
