@@ -30,7 +30,7 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        verilog lint simulate regress paper-nocache paper-caches bench-caches
+        verilog lint simulate soak regress paper-nocache paper-caches bench-caches
 
 help:
 	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | paper-nocache | paper-caches   (see README.md)"
@@ -76,10 +76,15 @@ golden: venv
 	@mkdir -p $(dir $(abspath $(OUT)))
 	$(PY) -m golden.export --scene $(SCENE) --out $(OUT) --width $(WIDTH) --height $(HEIGHT) --depth $(DEPTH) --seed $(SEED)
 
+# With GOLDEN=<dir of make golden> (rays from its camera frame), OUT also gets image.png and diff.png.
+IMAGE = if [ -n "$(GOLDEN)" ] && [ -f "$$OUT/hits.npy" ]; then \
+	  $(PY) -m golden.image --tris "$$T" --golden $(GOLDEN) --hits $$OUT/hits.npy --out $$OUT > $$OUT/image.json || exit $$?; \
+	  echo "[image] $$OUT/image.png (hits), $$OUT/diff.png (vs Embree)" >&2; fi
+RAYS_OR_GOLDEN = R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi
 trace: deps
-	@test -n "$(RAYS)" || { echo "error: give RAYS=<rays.npy>" >&2; exit 2; }
 	@test -n "$(OUT)" || { echo "error: give OUT=<dir>" >&2; exit 2; }
-	@T=$(TRIS) && $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $(RAYS) --out $(OUT) $(MODEL_ARGS)
+	@$(RAYS_OR_GOLDEN); OUT=$(OUT); T=$(TRIS) && \
+	  $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT $(MODEL_ARGS) && $(IMAGE)
 
 # Node/primitive cache models on the traversal's accesses (docs/caches.md). Last stdout line: JSON.
 # CACHE_FLAGS: the cache variables given (absent ones keep the preset's cache; NODE_CACHE=0 removes it).
@@ -89,7 +94,7 @@ CACHE_FLAGS = $(if $(NODE_CACHE),--node-cache $(NODE_CACHE)) $(if $(NODE_WAYS),-
   $(if $(PRIM_POLICY),--prim-policy $(PRIM_POLICY))
 CACHE_ARGS = $(if $(SWEEP),--sweep-out $(SWEEP)) $(EXTRA_CACHESIM)
 cachesim: deps
-	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
+	@$(RAYS_OR_GOLDEN); \
 	  T=$(TRIS) && $(JAVA) rtaccel.cli.CacheSim --tris "$$T" --scene-label $(SCENE) --rays $$R $(MODEL_ARGS) $(CACHE_ARGS)
 
 check: deps
@@ -144,11 +149,20 @@ lint: verilog verilator
 
 SIM_ARGS = $(if $(MEM_JITTER),--mem-jitter $(MEM_JITTER)) $(if $(HOST_STALL),--host-stall $(HOST_STALL)) \
   $(if $(MEM_ERROR_RATE),--mem-error-rate $(MEM_ERROR_RATE))
+# Exit status: 0 every check held, 2 bad input, 3 ran but a check failed (the JSON line and outputs remain).
 simulate: deps
-	@R=$(RAYS); if [ -z "$$R" ]; then [ -n "$(GOLDEN)" ] || { echo "error: give RAYS=<rays.npy> or GOLDEN=<dir>" >&2; exit 2; }; R=$(GOLDEN)/rays.npy; fi; \
-	  OUT=$${OUT:-build/simulate/$$(basename $(SCENE))}; T=$(TRIS) && \
-	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT $(MODEL_ARGS) $(SIM_ARGS)
+	@$(RAYS_OR_GOLDEN); OUT=$${OUT:-build/simulate/$$(basename $(SCENE))}; T=$(TRIS) || exit $$?; \
+	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT $(MODEL_ARGS) $(SIM_ARGS); rc=$$?; \
+	  if [ $$rc -eq 0 ] || [ $$rc -eq 3 ]; then $(IMAGE); fi; exit $$rc
 
+# At least RAYS_N rays (a 1000-wide camera frame of the embedded room) through the RTL in one run, with random
+# DRAM latency and host backpressure: 0 lost, 0 duplicated, 0 mismatches, or exit 3. A benchmark, not a test.
+RAYS_N ?= 1000000
+soak: deps build/scenes/cornell.obj
+	@H=$$(( ($(RAYS_N) + 999) / 1000 )); G=build/soak/golden-1000x$$H; \
+	  [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=build/scenes/cornell.obj OUT=$$G WIDTH=1000 HEIGHT=$$H DEPTH=0 >/dev/null || exit $$?; \
+	  $(MAKE) --no-print-directory simulate SCENE=build/scenes/cornell.obj GOLDEN=$$G CONFIG=$(RUN_CONFIG) \
+	    MEM_JITTER=$(or $(MEM_JITTER),23) HOST_STALL=$(or $(HOST_STALL),20) OUT=build/soak/simulate
 regress: deps
 	RTACCEL_REGRESS=full $(SBT) "testOnly rtaccel.top.PlatformSpec"
 

@@ -26,8 +26,12 @@ object EmitVerilog {
         (if (sys.env.contains("RTACCEL_DEBUG")) Array("--full-stacktrace") else Array[String]()),
       Seq(chisel3.stage.ChiselGeneratorAnnotation(() => new RtAccelTop(p)),
         _root_.circt.stage.FirtoolOption("-disable-all-randomization"), _root_.circt.stage.FirtoolOption("-strip-debug-info")))
+    // the host's view of this build: register map, counters and the configuration words it reads back
+    Cli.writeText(out.resolve("rtaccel_regs.h"), rtaccel.top.RegHeaders.c(p, Cli.version))
+    Cli.writeText(out.resolve("rtaccel_regs.py"), rtaccel.top.RegHeaders.python(p, Cli.version))
     val files = Files.list(out).toArray.map(_.toString).filter(f => f.endsWith(".sv") || f.endsWith(".v")).sorted
     System.err.println(s"[verilog] ${files.length} files in $out (config ${p.name}: ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}, stack ${p.stackDepth})")
-    println(ujson.write(ujson.Obj("config" -> p.name, "out" -> out.toString, "files" -> files.length, "top" -> "RtAccelTop")))
+    println(ujson.write(ujson.Obj("config" -> p.name, "out" -> out.toString, "files" -> files.length, "top" -> "RtAccelTop",
+      "regs_h" -> out.resolve("rtaccel_regs.h").toString, "regs_py" -> out.resolve("rtaccel_regs.py").toString)))
   }
 }

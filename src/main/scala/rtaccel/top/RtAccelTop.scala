@@ -114,7 +114,10 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   regs.io.events.hitOut := io.hits.fire
   regs.io.events.readError := h.readError
   regs.io.events.overflow := h.overflow
-  def ev(b: UInt): UInt = b.pad(perf.incBits) // PopCount of the TUs fits: incBits covers p.tus
+  def ev(b: UInt): UInt = { // PopCount of the TUs fits: incBits covers p.tus, so nothing is ever truncated
+    require(b.getWidth <= perf.incBits, s"a ${b.getWidth}-bit event does not fit the ${perf.incBits}-bit counter increments")
+    if (b.getWidth == perf.incBits) b.asUInt else Cat(0.U((perf.incBits - b.getWidth).W), b) // Bool.pad refuses to widen
+  }
   val events = Map(
     "cycles" -> 1.U, "batch_cycles" -> ev(regs.io.running), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
     "stall_iu_arbitration" -> ev(PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready))),
