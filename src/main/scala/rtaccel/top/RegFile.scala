@@ -117,7 +117,8 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
   io.lite.r.valid := rValid; io.lite.r.bits.data := rData; io.lite.r.bits.resp := rResp
   when(io.lite.r.fire) { rValid := false.B }
   val rAddr = io.lite.ar.bits.addr
-  val snap = RegInit(0.U(64.W)); val snapIdx = RegInit(0.U(log2Ceil(counterNames.length + 1).W))
+  // reading LO returns the live low word and keeps the high word of that instant for the HI read
+  val snapHi = RegInit(0.U(32.W)); val snapIdx = RegInit(0.U(log2Ceil(counterNames.length + 1).W))
   val status = Seq("BUSY" -> (running || io.events.busy), "DONE" -> done, "READ_ERROR" -> stickyReadError,
     "OVERFLOW" -> stickyOverflow, "RUNNING" -> running).map { case (f, v) => v.asUInt << bit(Status, f) }.reduce(_ | _)
   val table: Seq[(Int, UInt)] = constants.map { case (r, v) => r.offset -> v.U(32.W) } ++ Seq(
@@ -127,7 +128,7 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
     PrimBaseHi.offset -> primBase(63, 32), HitsDone.offset -> hitsDone, RaysIn.offset -> raysIn, Control.offset -> 0.U(32.W)) ++
     counterNames.indices.flatMap { i =>
       Seq(CounterBase + 8 * i -> io.counters(i)(31, 0),
-        CounterBase + 8 * i + 4 -> Mux(snapIdx === i.U, snap(63, 32), io.counters(i)(63, 32)))
+        CounterBase + 8 * i + 4 -> Mux(snapIdx === i.U, snapHi, io.counters(i)(63, 32)))
     }
   require(table.map(_._1).distinct.length == table.length, "two registers share an address")
   val mapped = table.map(t => rAddr === t._1.U).reduce(_ || _)
@@ -135,6 +136,6 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
     rValid := true.B
     rData := MuxLookup(rAddr, 0.U(32.W))(table.map { case (a, v) => a.U -> v })
     rResp := Mux(mapped, AxiLite.Okay.U, AxiLite.DecErr.U)
-    for (i <- counterNames.indices) when(rAddr === (CounterBase + 8 * i).U) { snap := io.counters(i); snapIdx := i.U }
+    for (i <- counterNames.indices) when(rAddr === (CounterBase + 8 * i).U) { snapHi := io.counters(i)(63, 32); snapIdx := i.U }
   }
 }
