@@ -54,7 +54,8 @@ def test_procedural_scene_agrees_with_embree(scene, m, mppl, tmp_path):
     model, summary = model_trace(d / "tris.npy", d / "golden/rays.npy", tmp_path, m, mppl)
     res = run_check(tris, rays, golden, model)
     assert res["unexplained"] == 0, res
-    assert res["agree"] >= 0.99 * res["rays"], res
+    # docs/results.md: on the procedural scenes every ray agrees (no classified disagreement either)
+    assert res["agree"] == res["rays"], res
     assert summary["stack_overflow_rays"] == 0 and summary["mppl"] == mppl and summary["m"] == m
 
 

@@ -1,7 +1,7 @@
 package rtaccel.cache
 
 import rtaccel.cache.policy.{LevelPolicy, Policies, ReplacementPolicy}
-import rtaccel.config.CacheParams
+import rtaccel.config.{CacheParams, CachePolicy}
 
 /** Trace-driven cache model (plain arrays, no allocation per access). `lines` lines of one request each
   * (node cache: one node; primitive cache: one leaf of up to MPPL primitives, so lines = entries / MPPL via
@@ -17,29 +17,28 @@ import rtaccel.config.CacheParams
   *    LevelPolicy.allocate(its level, incoming); otherwise the side cache is offered the line under LRP rules;
   *    refused there too = bypass.
   */
-final class CacheModel(val c: CacheParams, lineOf: Int => Int = identity, entriesPerLine: Int = 1) {
+final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int => Int = identity, entriesPerLine: Int = 1) {
   require(c.entries > 0, "CacheModel needs entries > 0 (0 means no cache)")
   require(entriesPerLine >= 1, "entries per line must be positive")
   val lines: Int = math.max(1, c.entries / entriesPerLine)
   require(Integer.bitCount(lines) == 1, s"cache lines ($lines) must be a power of two")
   val ways: Int = c.ways
   require(lines % ways == 0, s"cache ways ($ways) must divide its lines ($lines)")
-  private val policyName = c.policy
-  val policy: ReplacementPolicy = Policies.byName(policyName, ways)
+  val policy: ReplacementPolicy = Policies.of(c.policy, ways)
   private val maxLevel = c.maxLevel
   val sets: Int = lines / ways
   private val setMask = sets - 1
   private val tags = Array.fill(lines)(-1) // line id, -1 = empty
   private val lvls = new Array[Int](lines)
   private val state = Array.fill(sets)(policy.init)
-  private val isBf = policyName == "bf"
-  private val isLrp = policyName == "lrp"
-  private val isHybrid = policyName == "hybrid"
+  private val isBf = c.policy == CachePolicy.Bf
+  private val isLrp = c.policy == CachePolicy.Lrp
+  private val isHybrid = c.policy == CachePolicy.Hybrid
 
   // hybrid side cache (LRP)
   val sideLines: Int = if (isHybrid) math.max(1, lines / 8) else 0
   val sideWays: Int = if (isHybrid) math.min(4, sideLines) else 0
-  private val side: ReplacementPolicy = if (isHybrid) Policies.byName("lru", sideWays) else null
+  private val side: ReplacementPolicy = if (isHybrid) Policies.of(CachePolicy.Lru, sideWays) else null
   private val sideSets = if (isHybrid) sideLines / sideWays else 0
   private val sTags = Array.fill(sideLines)(-1)
   private val sLvls = new Array[Int](sideLines)
@@ -84,7 +83,7 @@ final class CacheModel(val c: CacheParams, lineOf: Int => Int = identity, entrie
     while (w < nWays && tg(base + w) != -1) w += 1
     if (w == nWays) {
       w = pol.victim(st(set))
-      if (lrp && !LevelPolicy.allocate(lv(base + w), level, maxLevel)) return false
+      if (lrp && !code.allocate(lv(base + w), level, maxLevel)) return false
     }
     tg(base + w) = line; lv(base + w) = level; st(set) = pol.touch(st(set), w)
     true
@@ -97,7 +96,7 @@ final class CacheModel(val c: CacheParams, lineOf: Int => Int = identity, entrie
     val sbase = sset * sideWays
     if (lookup(sTags, sState, side, sbase, sset, sideWays, line)) { hits += 1; return true }
     misses += 1
-    if (tags(i) == -1 || LevelPolicy.allocate(lvls(i), level, maxLevel)) { tags(i) = line; lvls(i) = level }
+    if (tags(i) == -1 || code.allocate(lvls(i), level, maxLevel)) { tags(i) = line; lvls(i) = level }
     else if (!fill(sTags, sLvls, sState, side, sbase, sset, sideWays, line, level, lrp = true)) bypasses += 1
     false
   }

@@ -28,9 +28,11 @@ object CacheSink {
     * lines hold one leaf of up to MPPL primitives. Throws on bad geometry.
     */
   def apply(p: rtaccel.config.PlatformParams): CacheSink = new CacheSink(
-    if (p.nodeCache.entries > 0) Some(new CacheModel(p.nodeCache)) else None,
-    if (p.primCache.entries > 0) Some(new CacheModel(p.primCache, identity, p.mppl)) else None,
+    if (p.nodeCache.entries > 0) Some(new CacheModel(p.nodeCache, code(p))) else None,
+    if (p.primCache.entries > 0) Some(new CacheModel(p.primCache, code(p), identity, p.mppl)) else None,
     p.nodeAccessBytes, p.primAccessBytes)
+  /** the level code the platform's caches use */
+  def code(p: rtaccel.config.PlatformParams): rtaccel.cache.policy.LevelPolicy.Code = rtaccel.cache.policy.LevelPolicy.Code(p.hw.levelCodeBits)
 }
 
 /** Replays a recorded access trace (AccessRecorder rows: ray, kind, id/first, level, count) into a sink.
@@ -44,15 +46,15 @@ object CacheSink {
   */
 object Replay {
   /** Replays child references in the order the RTL's memory controller accepted them (its access log): node
-    * refs carry their level field (saturated to 4 bits, as the RTL caches see it), leaf refs their first slot
-    * and count. Ray numbers are not in the log (-1).
+    * refs carry their level field (the cache model saturates it to its level code, as the MC does for the RTL
+    * caches), leaf refs their first slot and count. Ray numbers are not in the log (-1).
     */
   def refs(log: Array[Int], codec: rtaccel.bvh.RefCodec, sink: AccessSink): Unit = {
     var i = 0
     while (i < log.length) {
       val r = log(i)
       if (codec.isPrim(r)) sink.leaf(-1, codec.firstPrim(r), codec.count(r), 0)
-      else sink.node(-1, codec.nodeId(r), rtaccel.cache.policy.LevelPolicy.encode(codec.level(r)))
+      else sink.node(-1, codec.nodeId(r), codec.level(r))
       i += 1
     }
   }

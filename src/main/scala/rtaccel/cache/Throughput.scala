@@ -12,13 +12,12 @@ import rtaccel.config.PlatformParams
   * Z = L - D - B, is pure delay. MVA gives the throughput of N rays in flight; with N = 1 it is 1 / L,
   * for large N it approaches 1 / max(D, B).
   *
-  * `cachePathCycles` is the extra latency of an access through a cache path (tag lookup, ticket queue, data
+  * `p.hw.cachePathCycles` is the extra latency of an access through a cache path (tag lookup, ticket queue, data
   * RAM, output queue), measured on the RTL at one TU (docs/caches.md: 7.5-8.8 cycles per access on sponza and
   * conference); an uncached path adds none (measured -1..0). Head-of-line blocking in the in-order MC (a hit
   * waiting behind another TU's miss) is not modelled: the prediction is optimistic at mid TU counts.
   */
 object Throughput {
-  val cachePathCycles = 8.0
 
   final case class Prediction(latencyCycles: Double, dramCycles: Double, beatCycles: Double, raysPerCycle: Double)
 
@@ -41,6 +40,7 @@ object Throughput {
     val nodeMisses = s.nodeDramBytes / p.nodeAccessBytes.toDouble
     val leafMisses = s.primCache.fold(s.leafAccesses.toDouble)(_.misses.toDouble)
     val hitBytes = (s.nodeAccesses * p.nodeAccessBytes - s.nodeDramBytes) + (s.primTests * p.primAccessBytes - s.primDramBytes)
+    val cachePathCycles = p.hw.cachePathCycles
     val overhead = s.nodeCache.fold(0.0)(_ => cachePathCycles) * s.nodeAccesses + s.primCache.fold(0.0)(_ => cachePathCycles) * s.leafAccesses
     val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n
     val dram = (s.nodeDramBytes + s.primDramBytes) / bpc / n

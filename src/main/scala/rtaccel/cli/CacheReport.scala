@@ -21,7 +21,7 @@ object CacheReport {
       case (Some(s), Some(i)) =>
         val h = counters(s"${name}_cache_hits"); val m = counters(s"${name}_cache_misses"); val b = counters(s"${name}_cache_bypasses")
         ok &&= h == s.hits && m == s.misses && b == s.bypasses
-        ujson.Obj("entries" -> c.entries, "lines" -> s.lines, "ways" -> c.ways, "policy" -> c.policy, "max_level" -> c.maxLevel,
+        ujson.Obj("entries" -> c.entries, "lines" -> s.lines, "ways" -> c.ways, "policy" -> c.policy.name, "max_level" -> c.maxLevel,
           "hits" -> h.toDouble, "misses" -> m.toDouble, "bypasses" -> b.toDouble,
           "miss_rate" -> (if (h + m == 0) 0.0 else m.toDouble / (h + m)),
           "model_same_order" -> ujson.Obj("hits" -> s.hits.toDouble, "misses" -> s.misses.toDouble, "bypasses" -> s.bypasses.toDouble),

@@ -2,7 +2,7 @@ package rtaccel.cli
 
 import rtaccel.bvh.MemoryImage
 import rtaccel.cache.{CacheModel, CacheSink, Replay}
-import rtaccel.config.CacheParams
+import rtaccel.config.{CacheParams, CachePolicy}
 import rtaccel.io.InputError
 import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
 
@@ -46,7 +46,7 @@ object CacheSim {
     val n = math.max(1, rays.count).toDouble
     val accesses = sink.nodeAccesses + sink.leafAccesses
     def stats(c: Option[CacheModel], cp: CacheParams) = c match {
-      case Some(m) => ujson.Obj("entries" -> cp.entries, "lines" -> m.lines, "ways" -> cp.ways, "policy" -> cp.policy,
+      case Some(m) => ujson.Obj("entries" -> cp.entries, "lines" -> m.lines, "ways" -> cp.ways, "policy" -> cp.policy.name,
         "max_level" -> cp.maxLevel, "hits" -> m.hits.toDouble, "misses" -> m.misses.toDouble, "bypasses" -> m.bypasses.toDouble,
         "miss_rate" -> m.missRate, "side_lines" -> m.sideLines)
       case None => ujson.Obj("entries" -> 0, "hits" -> 0, "misses" -> 0, "bypasses" -> 0, "miss_rate" -> 1.0)
@@ -55,7 +55,7 @@ object CacheSim {
     val nodeBprNoCache = sink.nodeAccesses * p.nodeAccessBytes / n; val primBprNoCache = sink.primTests * p.primAccessBytes / n
     val sustained = p.memory.bytesPerSecond * p.memory.sustainedEfficiency // = clock x sustained bytes per cycle
     def bound(bpr: Double): Double = if (bpr > 0) sustained / bpr else Double.PositiveInfinity
-    a.opt("sweep-out").foreach(out => sweep(rows, java.nio.file.Paths.get(out), tus))
+    a.opt("sweep-out").foreach(out => sweep(rows, java.nio.file.Paths.get(out), tus, CacheSink.code(p)))
     val pred = rtaccel.cache.Throughput.predict(p, sink, rays.count, tus)
     val j = ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
@@ -78,19 +78,19 @@ object CacheSim {
   }
 
   /** Node-cache miss rate grid on one access stream. */
-  def sweep(rows: Array[Int], out: java.nio.file.Path, tus: Int): Unit = {
+  def sweep(rows: Array[Int], out: java.nio.file.Path, tus: Int, code: rtaccel.cache.policy.LevelPolicy.Code): Unit = {
     val sizes = Seq(256, 512, 1024, 2048, 4096, 8192)
     val cfgs: Seq[(String, Int => CacheParams)] =
-      Seq[(String, Int => CacheParams)]("dm" -> (e => CacheParams(e, 1, "dm")), "bf" -> (e => CacheParams(e, 1, "bf"))) ++
-        (0 to 6).map(l => s"lrp$l" -> ((e: Int) => CacheParams(e, 1, "lrp", l))) ++
-        (0 to 6 by 3).map(l => s"lrp${l}_4way" -> ((e: Int) => CacheParams(e, 4, "lrp", l))) ++
-        Seq[(String, Int => CacheParams)]("lru_4way" -> (e => CacheParams(e, 4, "lru")), "plru_4way" -> (e => CacheParams(e, 4, "plru")),
-          "hybrid_lrp6" -> (e => CacheParams(e, 1, "hybrid", 6)))
+      Seq[(String, Int => CacheParams)]("dm" -> (e => CacheParams(e, 1, CachePolicy.Dm)), "bf" -> (e => CacheParams(e, 1, CachePolicy.Bf))) ++
+        (0 to 6).map(l => s"lrp$l" -> ((e: Int) => CacheParams(e, 1, CachePolicy.Lrp, l))) ++
+        (0 to 6 by 3).map(l => s"lrp${l}_4way" -> ((e: Int) => CacheParams(e, 4, CachePolicy.Lrp, l))) ++
+        Seq[(String, Int => CacheParams)]("lru_4way" -> (e => CacheParams(e, 4, CachePolicy.Lru)), "plru_4way" -> (e => CacheParams(e, 4, CachePolicy.Plru)),
+          "hybrid_lrp6" -> (e => CacheParams(e, 1, CachePolicy.Hybrid, 6)))
     val sb = new StringBuilder("config," + sizes.mkString(",") + "\n")
     val t0 = System.nanoTime(); var total = 0L
     for ((name, mk) <- cfgs) {
       val rates = sizes.map { e =>
-        val m = new CacheModel(mk(e))
+        val m = new CacheModel(mk(e), code)
         Replay.interleaved(rows, tus, new AccessSink {
           def node(ray: Int, id: Int, level: Int): Unit = m.access(id, level)
           def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = ()

@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import java.nio.file.{Path, Paths}
-import rtaccel.config.{CacheParams, Fit, PlatformParams, Presets}
+import rtaccel.config.{CacheParams, CachePolicy, Fit, PlatformParams, Presets}
 import rtaccel.bvh.Mbvh
 import rtaccel.io.{InputError, Npy}
 import rtaccel.scene.{Normalize, Rays, Scene}
@@ -53,8 +53,9 @@ object Cli {
     val entries = a.int(s"$prefix-cache", base.entries)
     if (entries < 0) throw new InputError(s"--$prefix-cache must be >= 0 (got $entries)")
     val ways = a.int(s"$prefix-ways", base.ways)
-    val inherited = base.entries > 0 && !(base.policy == "dm" && ways > 1)
-    val pol = a.get(s"$prefix-policy", if (inherited) base.policy else if (ways == 1) "dm" else "lru")
+    val inherited = base.entries > 0 && !(base.policy == CachePolicy.Dm && ways > 1)
+    val pol = a.opt(s"$prefix-policy").map(CachePolicy.parse)
+      .getOrElse(if (inherited) base.policy else if (ways == 1) CachePolicy.Dm else CachePolicy.Lru)
     CacheParams(entries = entries, ways = ways, policy = pol, maxLevel = a.int("max-level", base.maxLevel))
   }
 

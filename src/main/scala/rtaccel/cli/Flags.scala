@@ -35,7 +35,9 @@ object Flags {
   val simOptions: Seq[Flag] = Seq(f("mem-jitter", "random extra DRAM latency (cycles)"),
     f("host-stall", "host backpressure percentage"), f("seed", "random seed of jitter and stalls"),
     f("work", "simulator build folder"), f("max-cycles", "cycle limit (a run that reaches it timed out)"),
-    f("mem-error-rate", "share of DRAM beats answered with SLVERR (MEM_ERROR_RATE, 0..1)"))
+    f("mem-error-rate", "share of DRAM beats answered with SLVERR (MEM_ERROR_RATE, 0..1)"),
+    f("waves", "1 writes OUT/waves.vcd (WAVES=)"), f("waves-from", "first cycle of the waveform window"),
+    f("waves-to", "last cycle of the waveform window"))
   val simulate: Seq[Flag] = inputs ++ platform ++ simOptions :+ f("out", "output folder")
   val sweepTus: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts"))
   val verilog: Seq[Flag] = platform :+ f("out", "output folder")

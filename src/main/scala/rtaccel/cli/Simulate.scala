@@ -13,7 +13,8 @@ import rtaccel.mc.AxiParams
 import rtaccel.cache.hw.CachePath
 import rtaccel.model.{AccessRecorder, AccessSink, MemFaults, RayStats, Traversal}
 import rtaccel.scene.{Hits, Rays}
-import rtaccel.sim.{DramConfig, HostDriver, HostSession, ImageFile, RaysFile, SimHarness, SimSetup}
+import rtaccel.host.{HostDriver, HostSession, ImageFile, RaysFile}
+import rtaccel.sim.{DramConfig, SimHarness, SimSetup}
 import rtaccel.top.RtAccelTop
 
 /** make simulate: the platform RTL (Verilator) on a rays file, checked ray by ray against the reference
@@ -22,7 +23,8 @@ import rtaccel.top.RtAccelTop
 object Simulate {
   def main(args: Array[String]): Unit = Cli.run(args, Flags.simulate)(main0)
 
-  final case class Outcome(json: ujson.Obj, hits: Hits) {
+  /** `vcd`: the whole run's trace when WAVES=1 (main0 cuts its window into OUT/waves.vcd). */
+  final case class Outcome(json: ujson.Obj, hits: Hits, vcd: Option[(Path, (Long, Long))] = None) {
     def failures: Seq[String] = json("failures").arr.map(_.str).toSeq
     def ok: Boolean = json("ok").bool
   }
@@ -34,6 +36,13 @@ object Simulate {
     val out = a.path("out")
     val o = run(a)
     o.hits.save(out.resolve("hits.npy"))
+    o.vcd.foreach { case (vcd, (from, to)) =>
+      val r = rtaccel.sim.VcdWindow.cut(vcd, out.resolve("waves.vcd"), from, to, rtaccel.sim.VcdWindow.clockPeriod(vcd))
+      o.json("waves") = ujson.Obj("file" -> out.resolve("waves.vcd").toString, "from_cycle" -> from, "to_cycle" -> to,
+        "signals" -> r.signals, "changes" -> r.changes.toDouble)
+      Files.delete(vcd) // the whole run's trace can be large; the window is what was asked for
+      System.err.println(s"[simulate] waves: cycles $from..$to of ${r.signals} signals in ${out.resolve("waves.vcd")}")
+    }
     Cli.writeText(out.resolve("summary.json"), ujson.write(o.json, indent = 2) + "\n")
     println(ujson.write(o.json))
     if (!o.ok) throw new CheckFailed(o.failures)
@@ -53,15 +62,27 @@ object Simulate {
   /** Options of one run that do not change the platform. */
   final case class SimOptions(label: String, memJitter: Int = 0, hostStall: Int = 0, seed: Int = 1,
                               work: String = "build/sim", maxCycles: Option[Long] = None, scaleExp: Int = 0,
-                              memErrorRate: Double = 0.0) {
+                              memErrorRate: Double = 0.0, waves: Option[(Long, Long)] = None) {
     val errorThreshold: Int = rtaccel.model.MemFaults.threshold(memErrorRate)
   }
+
+  /** WAVES=1 [WAVES_FROM=0 WAVES_TO=FROM+20000]: the cycle window of OUT/waves.vcd (tracing is built in only then). */
+  def wavesArg(a: Args): Option[(Long, Long)] =
+    if (a.get("waves", "0") == "0") None
+    else {
+      if (a.get("waves", "0") != "1") throw new InputError(s"WAVES must be 0 or 1 (got '${a.get("waves", "")}')")
+      def long(k: String, d: Long) = a.opt(k).map(v => v.toLongOption.filter(_ >= 0).getOrElse(
+        throw new InputError(s"--$k must be a cycle number >= 0 (got '$v')"))).getOrElse(d)
+      val from = long("waves-from", 0L); val to = long("waves-to", from + 20000L)
+      if (to < from) throw new InputError(s"WAVES_TO ($to) is before WAVES_FROM ($from)")
+      Some((from, to))
+    }
 
   def run(a: Args): Outcome = {
     val (scene, rays, scaleExp) = Cli.inputs(a)
     val b = Cli.build(scene, Cli.params(a), a)
     run(b, rays, SimOptions(a.get("scene-label", a.need("tris")), a.int("mem-jitter", 0), a.int("host-stall", 0),
-      a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp, a.double("mem-error-rate", 0.0)))
+      a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp, a.double("mem-error-rate", 0.0), wavesArg(a)))
   }
 
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
@@ -70,7 +91,7 @@ object Simulate {
     CachePath.validate(p)
     val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
     val img = MemoryImage.pack(b.bvh, b.scene, p)
-    val axi = AxiParams(dataBits = p.axiDataBits)
+    val axi = AxiParams.of(p)
     val lay0 = ImageFile.layout(img, axi)
     // the poisoned beats the DRAM model will answer with SLVERR (MEM_ERROR_RATE), known to the model
     val faults = MemFaults(o.errorThreshold, o.seed, axi.beatBytes, p.nodeStrideBytes, lay0.primBaseBytes, p.primStrideBytes)
@@ -91,6 +112,7 @@ object Simulate {
     val key = s"tus${p.tus}-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
       s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" + (if (o.errorThreshold > 0) s"-err${o.errorThreshold}" else "") +
+      (if (o.waves.isDefined) "-vcd" else "") +
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "")
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
@@ -106,7 +128,7 @@ object Simulate {
     var result: Outcome = null
     val t0 = System.nanoTime()
     RawTester.test(new SimHarness(p, setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
-      VerilatorCFlags(Seq("-O1")), CachingAnnotation)) { dut =>
+      VerilatorCFlags(Seq("-O1")), CachingAnnotation) ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
       dut.clock.setTimeout(0)
       dut.io.readIdx.poke(0.U)
       dut.io.rayCount.poke(rays.count.U) // what the host's stream holds
@@ -119,7 +141,8 @@ object Simulate {
       val chunk = 20000
       var lastReport = System.nanoTime()
       while (!dut.io.irq.peek().litToBoolean && stepped < maxCycles) {
-        dut.clock.step(chunk); stepped += chunk
+        val n = math.min(chunk.toLong, maxCycles - stepped).toInt // the cycle limit is exact
+        dut.clock.step(n); stepped += n
         if (System.nanoTime() - lastReport > 5e9) {
           System.err.println(f"[simulate] ${stepped / 1e6}%.1fM cycles, ${dut.io.received.peek().litValue}/${rays.count} hits")
           lastReport = System.nanoTime()
@@ -194,6 +217,12 @@ object Simulate {
       result = Outcome(json, hits)
     }
     if (result == null) throw new InputError("simulation did not complete")
-    result
+    o.waves match {
+      case Some(win) =>
+        val vcds = Files.walk(work.resolve("rtl")).toArray.map(_.asInstanceOf[Path]).filter(_.toString.endsWith(".vcd"))
+        if (vcds.isEmpty) throw new InputError(s"WAVES=1 but the simulator wrote no VCD under $work/rtl")
+        result.copy(vcd = Some(vcds.maxBy(f => Files.getLastModifiedTime(f).toMillis) -> win))
+      case None => result
+    }
   }
 }

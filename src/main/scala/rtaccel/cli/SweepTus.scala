@@ -7,7 +7,7 @@ import rtaccel.io.InputError
   */
 object SweepTus {
   def desc(c: rtaccel.config.CacheParams): String =
-    if (c.entries == 0) "none" else s"${c.entries}x${c.ways}-${c.policy}" + (if (Set("lrp", "hybrid")(c.policy)) s"-ml${c.maxLevel}" else "")
+    if (c.entries == 0) "none" else s"${c.entries}x${c.ways}-${c.policy}" + (if (c.policy.levelAware) s"-ml${c.maxLevel}" else "")
 
   /** A cache's miss rate from the simulate JSON (empty when the cache is absent); `model_interleaved` = the
     * trace model's prediction for the same TU count.

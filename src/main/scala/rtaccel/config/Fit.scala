@@ -22,7 +22,7 @@ object Fit {
     nodes = bvh.numNodes, prims = bvh.numPrims, maxLevel = bvh.maxLevel)
 
   /** Cache policies that read the node level from the reference. */
-  def levelAware(p: PlatformParams): Boolean = p.nodeCache.entries > 0 && Set("lrp", "hybrid")(p.nodeCache.policy)
+  def levelAware(p: PlatformParams): Boolean = p.nodeCache.entries > 0 && p.nodeCache.policy.levelAware
 
   /** The smallest configuration of `p`'s kind that holds the scene; the level field is kept only when the
     * config had one or its node cache is level-aware, and then sized so no level saturates.

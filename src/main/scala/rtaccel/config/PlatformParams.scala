@@ -21,12 +21,43 @@ final case class MemoryParams(bytesPerSecond: Double = 1.2e9, sustainedEfficienc
   require(latencyCycles >= 0, "memory latency cannot be negative")
 }
 
-/** Node-cache geometry and policy; entries = 0 means no cache. */
-final case class CacheParams(entries: Int = 0, ways: Int = 1, policy: String = "dm", maxLevel: Int = 15) {
+/** Cache geometry and policy; entries = 0 means no cache. MAX_LEVEL is checked against the level code
+  * width by PlatformParams (it is a register of that width).
+  */
+final case class CacheParams(entries: Int = 0, ways: Int = 1, policy: CachePolicy = CachePolicy.Dm, maxLevel: Int = 15) {
   require(entries == 0 || Integer.bitCount(entries) == 1, s"cache entries must be a power of two (got $entries)")
   require(ways >= 1 && (entries == 0 || entries % ways == 0), s"cache ways ($ways) must divide entries ($entries)")
-  require(Set("dm", "lru", "plru", "lrp", "bf", "hybrid")(policy), s"unknown cache policy '$policy'; use dm|lru|plru|lrp|bf|hybrid")
-  require(maxLevel >= 0 && maxLevel <= 15, s"MAX_LEVEL must be 0..15 (got $maxLevel)")
+  require(maxLevel >= 0, s"MAX_LEVEL must be >= 0 (got $maxLevel)")
+}
+
+/** Fixed sizes of the hardware that no scene changes: bus widths, outstanding-request limits, queue depths,
+  * the level code of the level replacement policy, and the cache-path latency the throughput model assumes.
+  * Each is checked here; a sweep may copy(...) them like any knob.
+  */
+final case class HwLimits(
+  axiAddrBits: Int = 32,      // byte address of the memory master (4 GB)
+  axiIdBits: Int = 4,
+  iuOutstanding: Int = 16,    // IU jobs in flight (memory requests issued ahead of their data)
+  mcOutstanding: Int = 32,    // MC requests in flight (its path-order FIFO)
+  cacheTickets: Int = 32,     // lookups a cache path holds between tag and data stage
+  cacheMissQueue: Int = 4,    // DRAM reads a cache path queues
+  cacheOutQueue: Int = 4,     // beats a cache path buffers towards the IU (>= 3: the data RAM read pipeline)
+  dramQueueDepth: Int = 16,   // AR requests the simulated DRAM queues
+  levelCodeBits: Int = 4,     // paper Section 7.2: node levels 0..14, 15 = 15 and deeper
+  cachePathCycles: Double = 8.0 // Throughput: extra cycles per access through a cache path (docs/caches.md)
+) {
+  require(axiAddrBits >= 12 && axiAddrBits <= 64, s"AXI address width must be 12..64 bits (got $axiAddrBits)")
+  require(axiIdBits >= 1 && axiIdBits <= 16, s"AXI id width must be 1..16 bits (got $axiIdBits)")
+  require(iuOutstanding >= 1 && iuOutstanding <= 1024, s"IU outstanding jobs must be 1..1024 (got $iuOutstanding)")
+  require(mcOutstanding >= 2 && mcOutstanding <= 1024, s"MC outstanding requests must be 2..1024 (got $mcOutstanding)")
+  require(cacheTickets >= 2 && cacheTickets <= 1024, s"cache tickets must be 2..1024 (got $cacheTickets)")
+  require(cacheMissQueue >= 1 && cacheMissQueue <= 64, s"cache miss queue must be 1..64 (got $cacheMissQueue)")
+  require(cacheOutQueue >= 3 && cacheOutQueue <= 64, s"cache output queue must be 3..64 beats (got $cacheOutQueue): the data RAM pipeline keeps up to 3 beats in flight")
+  require(dramQueueDepth >= 1 && dramQueueDepth <= 256, s"DRAM queue depth must be 1..256 (got $dramQueueDepth)")
+  require(levelCodeBits >= 1 && levelCodeBits <= 6, s"level code must be 1..6 bits (got $levelCodeBits); the RTL tabulates 2^bits x 2^bits classes")
+  require(cachePathCycles >= 0, s"cache path cycles cannot be negative (got $cachePathCycles)")
+  /** the highest level code: levels at or beyond it share it */
+  val maxLevelCode: Int = (1 << levelCodeBits) - 1
 }
 
 /** The one configuration object for the reference model, analysis and (later) the RTL generators.
@@ -48,7 +79,8 @@ final case class PlatformParams(
   memory: MemoryParams = MemoryParams(),
   sahBins: Int = 16,
   axiDataBits: Int = 256,
-  divStages: Int = 6
+  divStages: Int = 6,
+  hw: HwLimits = HwLimits()
 ) {
   require(tus >= 1 && tus <= 1024, s"TUS must be in 1..1024 (got $tus)")
   require(Set(2, 4, 8)(m), s"M (MBVH width) must be 2, 4 or 8 (got $m)")
@@ -60,6 +92,9 @@ final case class PlatformParams(
   require(sahBins >= 2, "SAH needs at least 2 bins")
   require(Seq(64, 128, 256, 512).contains(axiDataBits), s"AXI data width must be 64, 128, 256 or 512 bits (got $axiDataBits)")
   require(divStages >= 0 && divStages <= 32, s"divider pipeline stages must be 0..32 (got $divStages)")
+  for ((what, c) <- Seq("NODE" -> nodeCache, "PRIM" -> primCache))
+    require(c.maxLevel <= hw.maxLevelCode, s"MAX_LEVEL must be 0..${hw.maxLevelCode} for a ${hw.levelCodeBits}-bit level code (got ${c.maxLevel} on the $what cache)")
+  require(refs.levelBits <= 31, "level field too wide")
 
   /** Bytes one node occupies: M x (6 floats + ref) = 28*M, rounded up to a power of two so a node id
     * maps to an address by a shift (QBVH: 112 B stored in 128 B, as in the paper).

@@ -8,7 +8,7 @@ object Presets {
   val paper2017: PlatformParams = PlatformParams(
     name = "paper2017", tus = 32, m = 4, mppl = 4, stackDepth = 64, clockMhz = 150.0,
     refs = RefFormat(nodeIdBits = 31, primIndexBits = 27, countBits = 4, levelBits = 0),
-    nodeCache = CacheParams(entries = 8192, ways = 1, policy = "dm"),
+    nodeCache = CacheParams(entries = 8192, ways = 1, policy = CachePolicy.Dm),
     memory = MemoryParams(bytesPerSecond = 1.2e9, sustainedEfficiency = 0.5)
   )
 
@@ -16,7 +16,7 @@ object Presets {
   val paper2017Lrp: PlatformParams = paper2017.copy(
     name = "paper2017-lrp",
     refs = RefFormat(nodeIdBits = 27, primIndexBits = 27, countBits = 4, levelBits = 4),
-    nodeCache = CacheParams(entries = 8192, ways = 1, policy = "lrp", maxLevel = 4)
+    nodeCache = CacheParams(entries = 8192, ways = 1, policy = CachePolicy.Lrp, maxLevel = 4)
   )
 
   /** A small platform for quick simulations and unit tests; widths are fitted per scene. */

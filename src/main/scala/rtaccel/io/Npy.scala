@@ -10,6 +10,12 @@ final class InputError(msg: String) extends RuntimeException(msg)
 /** A parsed .npy array: header fields plus the raw little-endian payload. */
 final case class NpyArray(descr: String, shape: Seq[Int], data: ByteBuffer) {
   def count: Int = shape.product
+  /** Refuses a payload shorter than the shape needs (a truncated file) before anything reads past it. */
+  def requireBytes(path: Path, itemBytes: Int): Unit = {
+    val need = shape.map(_.toLong).product * itemBytes
+    if (data.remaining < need)
+      throw new InputError(s"$path: the shape (${shape.mkString(",")}) needs $need bytes of data but the file holds ${data.remaining}; the file is truncated, write it again")
+  }
 }
 
 /** Minimal NumPy .npy (format 1.0/2.0) reader and writer for the layouts rtaccel exchanges with Python:
@@ -31,12 +37,15 @@ object Npy {
       case 2 | 3 => (bb.getInt(8), 12)
       case v => throw new InputError(s"$path: unsupported .npy version $v")
     }
+    if (hlen < 0 || hstart.toLong + hlen > bytes.length)
+      throw new InputError(s"$path: its header claims $hlen bytes but the file has ${bytes.length - hstart}; the file is truncated")
     val header = new String(bytes, hstart, hlen, "latin1")
     val descr = field(header, "descr", path)
     if (field(header, "fortran_order", path).trim != "False")
       throw new InputError(s"$path: Fortran-order array; save a C-contiguous array (np.ascontiguousarray)")
     val shapeTxt = field(header, "shape", path).trim.stripPrefix("(").stripSuffix(")")
-    val shape = shapeTxt.split(",").map(_.trim).filter(_.nonEmpty).map(_.toInt).toSeq
+    val shape = shapeTxt.split(",").map(_.trim).filter(_.nonEmpty).map(d => d.toIntOption.filter(_ >= 0).getOrElse(
+      throw new InputError(s"$path: malformed shape '($shapeTxt)' in the .npy header; write the file with numpy.save"))).toSeq
     val data = ByteBuffer.wrap(bytes, hstart + hlen, bytes.length - hstart - hlen).slice().order(ByteOrder.LITTLE_ENDIAN)
     NpyArray(descr.trim, shape, data)
   }
@@ -54,11 +63,14 @@ object Npy {
       }
       rest.substring(0, i + 1)
     }
-    rest.head match {
+    try rest.head match {
       case '\'' => rest.substring(1, rest.indexOf('\'', 1))
       case '['  => until('[', ']')
       case '('  => until('(', ')')
       case _    => rest.takeWhile(c => c != ',' && c != '}')
+    } catch { // a damaged header: say so in one line instead of an index error
+      case _: IndexOutOfBoundsException | _: NoSuchElementException =>
+        throw new InputError(s"$path: malformed '$key' in the .npy header; write the file with numpy.save")
     }
   }
 
@@ -69,6 +81,7 @@ object Npy {
       throw new InputError(s"$path: $what must be float32 ('<f4'), found '${a.descr}'; convert with .astype(np.float32)")
     if (a.shape.length != expectTrailing.length + 1 || a.shape.tail != expectTrailing)
       throw new InputError(s"$path: $what must have shape (N,${expectTrailing.mkString(",")}), found (${a.shape.mkString(",")})")
+    a.requireBytes(path, 4)
     val out = new Array[Float](a.count)
     a.data.asFloatBuffer().get(out)
     (out, a.shape.head)

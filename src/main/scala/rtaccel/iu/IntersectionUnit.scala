@@ -11,7 +11,8 @@ import rtaccel.mc.{FetchBeat, FetchReq}
   * at most one request outstanding and always takes its results, so the pipelines never stall).
   * Memory requests are issued ahead while earlier data is still arriving, up to `maxOutstanding`.
   */
-class IntersectionUnit(p: PlatformParams, beatBits: Int, maxOutstanding: Int = 16) extends Module {
+class IntersectionUnit(p: PlatformParams, beatBits: Int) extends Module {
+  private val maxOutstanding = p.hw.iuOutstanding
   val io = IO(new Bundle {
     val req = Flipped(Vec(p.tus, Decoupled(new IuReq(p))))
     val box = Valid(new BoxResult(p))

@@ -9,6 +9,11 @@ final case class AxiParams(addrBits: Int = 32, dataBits: Int = 256, idBits: Int 
   val beatBytes: Int = dataBits / 8
 }
 
+object AxiParams {
+  /** The memory master of a platform: widths from PlatformParams (axiDataBits, hw.axiAddrBits, hw.axiIdBits). */
+  def of(p: rtaccel.config.PlatformParams): AxiParams = AxiParams(p.hw.axiAddrBits, p.axiDataBits, p.hw.axiIdBits)
+}
+
 class AxiAr(p: AxiParams) extends Bundle {
   val id = UInt(p.idBits.W)
   val addr = UInt(p.addrBits.W)

@@ -29,12 +29,12 @@ class MemReq(addrBits: Int, beatsBits: Int) extends Bundle {
 
 /** A request as a path sees it: the DRAM read plus what a cache needs to place it. `line` is the node id
   * (node path) or the leaf's first primitive slot (primitive path); `level` is the node's tree level from its
-  * reference, saturated to 4 bits as in the paper's Section 7.2 encoding (0 for leaves and when the reference
-  * format has no level field).
+  * reference, saturated to the level code (hw.levelCodeBits, 4 as in the paper's Section 7.2 encoding; 0 for
+  * leaves and when the reference format has no level field).
   */
-class PathReq(addrBits: Int, beatsBits: Int) extends MemReq(addrBits, beatsBits) {
+class PathReq(addrBits: Int, beatsBits: Int, levelBits: Int) extends MemReq(addrBits, beatsBits) {
   val line = UInt(32.W)
-  val level = UInt(4.W)
+  val level = UInt(levelBits.W)
 }
 
 /** Hit/miss counters a path reports (all zero for the pass-through). */
@@ -67,7 +67,7 @@ final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   val maxBeats: Int = math.max(nodeBeats, p.refs.maxLeafPrims * primBeats)
   val beatsBits: Int = log2Ceil(maxBeats + 1)
   def memReq = new MemReq(axi.addrBits, beatsBits)
-  def pathReq = new PathReq(axi.addrBits, beatsBits)
+  def pathReq = new PathReq(axi.addrBits, beatsBits, p.hw.levelCodeBits)
 }
 
 /** The interface a node or primitive cache implements to plug into the MC.
@@ -82,7 +82,7 @@ final case class McGeometry(p: PlatformParams, axi: AxiParams) {
 class FetchPathIO(g: McGeometry) extends Bundle {
   val in = Flipped(Decoupled(g.pathReq))
   val primBase = Input(UInt(g.axi.addrBits.W))
-  val maxLevel = Input(UInt(4.W))
+  val maxLevel = Input(UInt(g.p.hw.levelCodeBits.W))
   val clearStats = Input(Bool()) // the host's CLEAR_COUNTERS
   val stats = Output(new PathStats)
   val memReq = Decoupled(g.memReq)
@@ -177,16 +177,17 @@ class BurstSplitter(g: McGeometry, id: Int = 0) extends Module {
   * room for all its beats (credits), so R never waits on the order mux and cannot deadlock; backpressure then
   * stops AR issue instead of holding R.
   */
-class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 32,
+class MemoryController(p: PlatformParams, axi: AxiParams,
                        pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
                        respBufferBeats: Int = 0) extends Module {
   val g = McGeometry(p, axi)
   private val ap = axi
+  private val maxOutstanding = p.hw.mcOutstanding
   val io = IO(new Bundle {
     val req = Flipped(Decoupled(new FetchReq))
     val resp = Decoupled(new FetchBeat(ap.dataBits))
     val primBase = Input(UInt(ap.addrBits.W))
-    val maxLevel = Input(UInt(4.W)) // MAX_LEVEL register of the level replacement policy
+    val maxLevel = Input(UInt(p.hw.levelCodeBits.W)) // MAX_LEVEL register of the level replacement policy
     val clearCounters = Input(Bool()) // zeroes the counters below and every path's cache statistics
     val axi = new AxiReadMaster(ap)
     val counters = Output(new McCounters)
@@ -209,10 +210,11 @@ class MemoryController(p: PlatformParams, axi: AxiParams, maxOutstanding: Int = 
   val nodeAddr = toAddr(nodeId << log2Ceil(p.nodeStrideBytes))
   val primAddr = toAddr(io.primBase +& (first << log2Ceil(p.primStrideBytes)))
   val primBeatsLog = log2Ceil(g.primBeats)
-  // the node's level field, saturated to the 4-bit code every cache policy works with
+  // the node's level field, saturated to the level code every cache policy works with
+  private val codeBits = p.hw.levelCodeBits; private val maxCode = p.hw.maxLevelCode
   val nodeLevel: UInt =
-    if (f.levelBits == 0) 0.U(4.W)
-    else { val l = ref(f.nodeIdBits + f.levelBits - 1, f.nodeIdBits); Mux(l > 15.U, 15.U, l)(3, 0) }
+    if (f.levelBits == 0) 0.U(codeBits.W)
+    else { val l = ref(f.nodeIdBits + f.levelBits - 1, f.nodeIdBits); Mux(l > maxCode.U, maxCode.U, l)(codeBits - 1, 0) }
 
   // ---- paths and dispatch (order FIFO: path of every request in flight)
   val paths = Seq.tabulate(2)(i => Module(pathFactory(g, i)))

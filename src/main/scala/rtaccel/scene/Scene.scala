@@ -72,6 +72,7 @@ object Hits {
     val a = rtaccel.io.Npy.read(path)
     if (!a.descr.contains("'t'") || !a.descr.contains("'prim'") || a.shape.length != 1)
       throw new rtaccel.io.InputError(s"$path: not a hits file (want dtype [t f4, prim i4, u f4, v f4], got ${a.descr})")
+    a.requireBytes(path, 16)
     val h = empty(a.count); val bb = a.data
     for (i <- 0 until a.count) { h.t(i) = bb.getFloat(16 * i); h.prim(i) = bb.getInt(16 * i + 4); h.u(i) = bb.getFloat(16 * i + 8); h.v(i) = bb.getFloat(16 * i + 12) }
     h

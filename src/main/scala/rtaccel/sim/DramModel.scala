@@ -38,7 +38,7 @@ object DramConfig {
 
 /** Simulation-only AXI4 read slave (INCR bursts of full-width beats, in order, any ID echoed back).
   *
-  * Memory: `words` entries of dataBits, initialised from a `$readmemh` file (see ImageFile), read
+  * Memory: `words` entries of dataBits, initialised from a `$readmemh` file (see rtaccel.host.ImageFile), read
   * combinationally so that a beat held under R backpressure stays stable.
   * Requests: an AR queue of `queueDepth` entries; an entry accepted in cycle t is stamped
   * readyAt = t + latencyCycles + extra (extra = LFSR value mod (randomExtraLatency + 1)); the head request

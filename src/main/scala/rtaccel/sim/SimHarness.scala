@@ -45,7 +45,7 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val logCount = Output(UInt(32.W))
     val logData = Output(UInt(32.W))
   })
-  val dram = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, s.dram))
+  val dram = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, s.dram, p.hw.dramQueueDepth))
   dram.io.axi <> top.io.mem
   top.io.lite <> io.lite
   io.irq := top.io.irq

@@ -53,4 +53,16 @@ object RegHeaders {
     sb ++= "}\n\n\ndef offset(name):\n    return REGS[name][0]\n\n\ndef counter_offset(name):\n    return COUNTER_BASE + 8 * COUNTERS.index(name)\n"
     sb.toString
   }
+
+  /** The register table of docs/registers.md (between its BEGIN/END markers; RegHeadersSpec keeps it current). */
+  def markdown: String = {
+    val sb = new StringBuilder("| offset | register | access | meaning | fields (bits) |\n|---|---|---|---|---|\n")
+    for (r <- RegMap.fixed)
+      sb ++= f"| 0x${r.offset}%03x | `${r.name}` | ${r.access.code} | ${r.doc} | " +
+        r.fields.map(f => s"`${f.name}` [${if (f.width == 1) f.lsb.toString else s"${f.lsb + f.width - 1}:${f.lsb}"}]" +
+          (if (f.doc.nonEmpty) s" ${f.doc}" else "")).mkString("; ") + " |\n"
+    for ((n, i) <- RtAccelTop.counterNames.zipWithIndex)
+      sb ++= f"| 0x${RegMap.CounterBase + 8 * i}%03x | `CNT_${n.toUpperCase}_LO`/`_HI` | RO | counter `$n` (64-bit) | |\n"
+    sb.toString
+  }
 }

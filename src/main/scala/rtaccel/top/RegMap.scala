@@ -78,5 +78,5 @@ object RegMap {
     val end = CounterBase + 8 * counterNames.length
     math.max(12, 32 - Integer.numberOfLeadingZeros(end - 1))
   }
-  def policyCode(policy: String): Int = rtaccel.cache.policy.Policies.names.indexOf(policy)
+  def policyCode(policy: rtaccel.config.CachePolicy): Int = rtaccel.config.CachePolicy.code(policy)
 }

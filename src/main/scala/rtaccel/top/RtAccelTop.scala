@@ -56,7 +56,7 @@ object RtAccelTop {
   * access order the caches saw and replay it through the trace model.
   */
 class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module {
-  val axiP = AxiParams(dataBits = p.axiDataBits)
+  val axiP = AxiParams.of(p)
   val io = IO(new Bundle {
     val rays = Flipped(Decoupled(new AxisBeat(RtAccelTop.RayBits)))
     val hits = Decoupled(new AxisBeat(RtAccelTop.HitBits))
@@ -73,7 +73,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val mc = Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
     respBufferBeats = if (cached) 2 * McGeometry(p, axiP).maxBeats else 0))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
-  val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, 4))
+  val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
   regs.io.lite <> io.lite
   io.irq := regs.io.irq
 

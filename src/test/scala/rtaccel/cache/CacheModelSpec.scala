@@ -4,19 +4,34 @@ import scala.collection.mutable
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
 import rtaccel.bvh.{MemoryImage, Mbvh}
-import rtaccel.cache.policy.{LevelPolicy, TreePlru}
-import rtaccel.config.{CacheParams, Fit, PlatformParams}
+import rtaccel.cache.policy.LevelPolicy
+import rtaccel.config.{CacheParams, CachePolicy, Fit, HwLimits, PlatformParams}
 import rtaccel.model.{AccessRecorder, AccessSink, Traversal}
 
 /** Naive reference: Map of set -> list of (line, level), most recent first (contents only, no way numbers),
-  * except PLRU, which needs way positions (slots + the exhaustively tested TreePlru state).
+  * except PLRU, which needs way positions (slots + its own tree of ranges).
   */
 final class RefCache(c: CacheParams, perLine: Int = 1) {
+  // The level rule and tree PLRU written again from docs/caches.md, not taken from rtaccel.cache.policy:
+  // levels 15 and deeper share code 15; class = min(code, MAX_LEVEL + 1); a fill may replace a victim of
+  // the same or a numerically larger class.
+  private def levelClass(l: Int) = math.min(math.min(math.max(l, 0), 15), c.maxLevel + 1)
+  private def mayReplace(victim: Int, incoming: Int) = levelClass(incoming) <= levelClass(victim)
+  /** PLRU as a tree of ranges: each inner node [lo, hi) remembers on which half its victim lies (left at first);
+    * using a way turns every node on its path towards the other half.
+    */
+  private final class PlruTree(ways: Int) {
+    private val victimRight = mutable.Map[(Int, Int), Boolean]().withDefaultValue(false)
+    def touch(way: Int): Unit = { var lo = 0; var hi = ways
+      while (hi - lo > 1) { val mid = (lo + hi) / 2; val right = way >= mid; victimRight((lo, hi)) = !right; if (right) lo = mid else hi = mid } }
+    def victim: Int = { var lo = 0; var hi = ways
+      while (hi - lo > 1) { val mid = (lo + hi) / 2; if (victimRight((lo, hi))) lo = mid else hi = mid }; lo }
+  }
+  private val plrus = mutable.Map[Int, PlruTree]()
   val lines: Int = math.max(1, c.entries / perLine)
   val sets: Int = lines / c.ways
   private val lists = mutable.Map[Int, List[(Int, Int)]]().withDefaultValue(Nil)
   private val slots = mutable.Map[Int, Array[Option[(Int, Int)]]]()
-  private val plruState = mutable.Map[Int, Int]().withDefaultValue(0)
   private val dmSide = mutable.Map[Int, (Int, Int)]()
   private val sideLines = math.max(1, lines / 8); private val sideWays = math.min(4, sideLines)
   private val side = mutable.Map[Int, List[(Int, Int)]]().withDefaultValue(Nil)
@@ -28,22 +43,23 @@ final class RefCache(c: CacheParams, perLine: Int = 1) {
       case Some(e) => m(set) = e :: l.filterNot(_ == e); Some(true)
       case None =>
         if (l.size < ways) { m(set) = (line, level) :: l; Some(false) }
-        else if (!lrp || LevelPolicy.allocate(l.last._2, level, c.maxLevel)) { m(set) = (line, level) :: l.init; Some(false) }
+        else if (!lrp || mayReplace(l.last._2, level)) { m(set) = (line, level) :: l.init; Some(false) }
         else None // bypass
     }
   }
 
   def access(line: Int, level: Int): Boolean = {
-    val r: Option[Boolean] = c.policy match {
+    val r: Option[Boolean] = c.policy.name match {
       case "bf" => if (line < lines) Some(true) else None
-      case "dm" | "lru" | "lrp" => lruAccess(lists, line % sets, c.ways, line, level, c.policy == "lrp")
+      case "dm" | "lru" | "lrp" => lruAccess(lists, line % sets, c.ways, line, level, c.policy == CachePolicy.Lrp)
       case "plru" =>
-        val set = line % sets; val s = slots.getOrElseUpdate(set, Array.fill(c.ways)(None)); val p = TreePlru(c.ways)
+        val set = line % sets; val s = slots.getOrElseUpdate(set, Array.fill(c.ways)(None))
+        val tree = plrus.getOrElseUpdate(set, new PlruTree(c.ways))
         s.indexWhere(_.exists(_._1 == line)) match {
           case -1 =>
-            val w = if (s.contains(None)) s.indexOf(None) else p.victim(plruState(set))
-            s(w) = Some((line, level)); plruState(set) = p.touch(plruState(set), w); Some(false)
-          case w => plruState(set) = p.touch(plruState(set), w); Some(true)
+            val w = if (s.contains(None)) s.indexOf(None) else tree.victim
+            s(w) = Some((line, level)); tree.touch(w); Some(false)
+          case w => tree.touch(w); Some(true)
         }
       case "hybrid" =>
         val i = line % lines
@@ -51,7 +67,7 @@ final class RefCache(c: CacheParams, perLine: Int = 1) {
         else {
           val ss = line % (sideLines / sideWays)
           if (side(ss).exists(_._1 == line)) lruAccess(side, ss, sideWays, line, level, lrp = true)
-          else if (dmSide.get(i).forall(v => LevelPolicy.allocate(v._2, level, c.maxLevel))) { dmSide(i) = (line, level); Some(false) }
+          else if (dmSide.get(i).forall(v => mayReplace(v._2, level))) { dmSide(i) = (line, level); Some(false) }
           else lruAccess(side, ss, sideWays, line, level, lrp = true)
         }
     }
@@ -73,14 +89,14 @@ class CacheModelSpec extends AnyFunSuite {
   }
 
   private val configs: Seq[CacheParams] =
-    (for (e <- Seq(8, 64, 256); w <- Seq(1, 2, 4, 8) if w <= e; pol <- Seq("lru", "plru", "lrp")) yield CacheParams(e, w, pol, 3)) ++
-      (for (e <- Seq(8, 64, 256)) yield Seq(CacheParams(e, 1, "dm"), CacheParams(e, 1, "bf"))).flatten ++
-      (for (e <- Seq(8, 64, 256); ml <- Seq(0, 3, 15)) yield Seq(CacheParams(e, 1, "hybrid", ml), CacheParams(e, 1, "lrp", ml),
-        CacheParams(e, 4, "lrp", ml))).flatten
+    (for (e <- Seq(8, 64, 256); w <- Seq(1, 2, 4, 8) if w <= e; pol <- Seq(CachePolicy.Lru, CachePolicy.Plru, CachePolicy.Lrp)) yield CacheParams(e, w, pol, 3)) ++
+      (for (e <- Seq(8, 64, 256)) yield Seq(CacheParams(e, 1, CachePolicy.Dm), CacheParams(e, 1, CachePolicy.Bf))).flatten ++
+      (for (e <- Seq(8, 64, 256); ml <- Seq(0, 3, 15)) yield Seq(CacheParams(e, 1, CachePolicy.Hybrid, ml), CacheParams(e, 1, CachePolicy.Lrp, ml),
+        CacheParams(e, 4, CachePolicy.Lrp, ml))).flatten
 
   test(s"CacheModel equals a Map-based reference on random traces (${configs.size} configurations x 3 traces)") {
     for (c <- configs; seed <- 1 to 3) {
-      val m = new CacheModel(c); val ref = new RefCache(c)
+      val m = new CacheModel(c, LevelPolicy.paper); val ref = new RefCache(c)
       val tr = randomTrace(seed, 20000, 4 * c.entries + 50)
       for ((id, k) <- tr.zipWithIndex) assert(m.access(id, level(id)) == ref.access(id, level(id)), s"$c seed $seed access $k id $id")
       assert((m.hits, m.misses, m.bypasses) == ((ref.hits, ref.misses, ref.bypasses)), c.toString)
@@ -88,15 +104,15 @@ class CacheModelSpec extends AnyFunSuite {
   }
 
   test("primitive cache: lines = entries / MPPL, line id = first primitive slot") {
-    val c = CacheParams(64, 2, "lru")
-    val m = new CacheModel(c, identity, 4); val ref = new RefCache(c, 4)
+    val c = CacheParams(64, 2, CachePolicy.Lru)
+    val m = new CacheModel(c, LevelPolicy.paper, identity, 4); val ref = new RefCache(c, 4)
     assert(m.lines == 16)
     for (id <- randomTrace(9, 20000, 400)) assert(m.access(id, 3) == ref.access(id, 3))
   }
 
   test("breadth-first buffer holds exactly ids < N and never changes") {
     for (n <- Seq(1, 16, 256)) {
-      val m = new CacheModel(CacheParams(n, 1, "bf"))
+      val m = new CacheModel(CacheParams(n, 1, CachePolicy.Bf), LevelPolicy.paper)
       for (id <- randomTrace(4, 5000, 4 * n)) m.access(id, level(id))
       for (id <- 0 until 8 * n) assert(m.contains(id) == (id < n))
       assert(m.access(n - 1, 0) && !m.access(n, 0) && m.bypasses == m.misses)
@@ -104,11 +120,13 @@ class CacheModelSpec extends AnyFunSuite {
   }
 
   test("bad geometry is refused") {
-    assertThrows[IllegalArgumentException](CacheParams(100, 1, "dm"))
-    assertThrows[IllegalArgumentException](CacheParams(64, 1, "fifo"))
-    assertThrows[IllegalArgumentException](CacheParams(64, 1, "lrp", 16))
-    assertThrows[IllegalArgumentException](new CacheModel(CacheParams(64, 4, "dm")))
-    assertThrows[IllegalArgumentException](new CacheModel(CacheParams(64, 16, "lru")))
+    assertThrows[IllegalArgumentException](CacheParams(100, 1, CachePolicy.Dm))
+    assertThrows[rtaccel.io.InputError](CachePolicy.parse("fifo"))
+    // MAX_LEVEL is a register of the level code's width: 16 needs more than the paper's 4 bits
+    assertThrows[IllegalArgumentException](PlatformParams(nodeCache = CacheParams(64, 1, CachePolicy.Lrp, 16)))
+    assert(PlatformParams(nodeCache = CacheParams(64, 1, CachePolicy.Lrp, 16), hw = HwLimits(levelCodeBits = 5)).nodeCache.maxLevel == 16)
+    assertThrows[IllegalArgumentException](new CacheModel(CacheParams(64, 4, CachePolicy.Dm), LevelPolicy.paper))
+    assertThrows[IllegalArgumentException](new CacheModel(CacheParams(64, 16, CachePolicy.Lru), LevelPolicy.paper))
   }
 
   // ------------------------------------------------------------- on a scene's traversal trace
@@ -120,18 +138,18 @@ class CacheModelSpec extends AnyFunSuite {
     (rec.toArray, bvh.numNodes)
   }
   private def run(c: CacheParams, tus: Int = 1): CacheModel = {
-    val m = new CacheModel(c)
+    val m = new CacheModel(c, LevelPolicy.paper)
     Replay.interleaved(sceneTrace._1, tus, new CacheSink(Some(m), None, 128, 64))
     m
   }
 
   test("inclusion: a bigger LRU (same ways) or more-way LRU (same sets) cache never misses more, 1 and 8 TUs") {
     for (tus <- Seq(1, 8); w <- Seq(1, 2, 4)) {
-      val ms = Seq(16, 32, 64, 128, 256, 512, 1024).map(e => run(CacheParams(e, w, "lru"), tus).misses)
+      val ms = Seq(16, 32, 64, 128, 256, 512, 1024).map(e => run(CacheParams(e, w, CachePolicy.Lru), tus).misses)
       assert(ms.zip(ms.tail).forall { case (a, b) => b <= a }, s"ways $w tus $tus: $ms")
     }
     for (sets <- Seq(16, 64)) {
-      val ms = Seq(1, 2, 4, 8).map(w => run(CacheParams(sets * w, w, "lru")).misses)
+      val ms = Seq(1, 2, 4, 8).map(w => run(CacheParams(sets * w, w, CachePolicy.Lru)).misses)
       assert(ms.zip(ms.tail).forall { case (a, b) => b <= a }, s"sets $sets: $ms")
     }
   }
@@ -141,7 +159,7 @@ class CacheModelSpec extends AnyFunSuite {
     val e = Integer.highestOneBit(nodes) * 2
     val distinct = (0 until rows.length / 5).filter(r => rows(5 * r + 1) == 0).map(r => rows(5 * r + 2)).distinct.size
     for (tus <- Seq(1, 4)) {
-      val m = run(CacheParams(e, 1, "dm"), tus)
+      val m = run(CacheParams(e, 1, CachePolicy.Dm), tus)
       assert(m.misses == distinct && distinct <= nodes)
     }
   }

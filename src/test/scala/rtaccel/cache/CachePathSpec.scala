@@ -7,7 +7,7 @@ import org.scalatest.flatspec.AnyFlatSpec
 import rtaccel.bvh.{MemoryImage, RefCodec}
 import rtaccel.cache.hw.{CachePath, PolicyTables}
 import rtaccel.cache.policy.{LevelPolicy, Policies, ReplacementPolicy}
-import rtaccel.config.{CacheParams, RefFormat}
+import rtaccel.config.{CacheParams, CachePolicy, RefFormat}
 import rtaccel.mc.{McCases, McHarness}
 import rtaccel.sim.DramConfig
 
@@ -29,7 +29,7 @@ class PolicyTableHarness(pol: ReplacementPolicy) extends Module {
 class PolicyTablesSpec extends AnyFlatSpec with ChiselScalatestTester {
   behavior of "PolicyTables"
   for ((name, ways) <- Seq("lru" -> 2, "lru" -> 4, "plru" -> 4, "plru" -> 8)) it should s"equal $name $ways-way touch/victim in every reachable state" in {
-    val pol = Policies.byName(name, ways)
+    val pol = Policies.of(CachePolicy.parse(name), ways)
     test(new PolicyTableHarness(pol)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut => // 8-way PLRU: ~1 min in treadle
       for (s <- pol.states) {
         dut.io.state.poke(s.U)
@@ -42,7 +42,7 @@ class PolicyTablesSpec extends AnyFlatSpec with ChiselScalatestTester {
     }
   }
   it should "equal LevelPolicy.allocate for all 16 x 16 x 16 levels and MAX_LEVELs" in {
-    test(new PolicyTableHarness(Policies.byName("dm", 1))).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+    test(new PolicyTableHarness(Policies.of(CachePolicy.Dm, 1))).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
       for (ml <- 0 to 15; v <- 0 to 15; i <- 0 to 15) {
         dut.io.maxLevel.poke(ml.U); dut.io.vLevel.poke(v.U); dut.io.iLevel.poke(i.U)
         assert(dut.io.allocate.peek().litToBoolean == LevelPolicy.allocate(v, i, ml), s"allocate($v, $i, $ml)")
@@ -50,7 +50,7 @@ class PolicyTablesSpec extends AnyFlatSpec with ChiselScalatestTester {
     }
   }
   it should "refuse state it cannot tabulate, saying what to change" in {
-    val e = intercept[IllegalArgumentException](PolicyTables.check(Policies.byName("lru", 8)))
+    val e = intercept[IllegalArgumentException](PolicyTables.check(Policies.of(CachePolicy.Lru, 8)))
     assert(e.getMessage.contains("fewer ways"))
   }
 }
@@ -95,13 +95,13 @@ class CachePathSpec extends McCases {
 
   behavior of "CachePath in the MC"
   val none = CacheParams()
-  cacheCase("direct-mapped node cache, 16 lines", CacheParams(16, 1, "dm"), none, seed = 31)
-  cacheCase("4-way true-LRU node cache + 2-way LRU primitive cache", CacheParams(32, 4, "lru"), CacheParams(32, 2, "lru"), seed = 32)
-  cacheCase("4-way tree-PLRU node cache + direct-mapped primitive cache", CacheParams(32, 4, "plru"), CacheParams(16, 1, "dm"), seed = 33)
-  cacheCase("level policy, direct-mapped, MAX_LEVEL 2", CacheParams(16, 1, "lrp", maxLevel = 2), none, seed = 34, expectBypass = true)
-  cacheCase("level policy, 2-way LRU, MAX_LEVEL 1", CacheParams(16, 2, "lrp", maxLevel = 1), none, seed = 35, expectBypass = true)
-  cacheCase("breadth-first static buffer of 16 nodes (preloaded)", CacheParams(16, 1, "bf"), none, seed = 36, expectBypass = true)
-  cacheCase("hybrid: DM + LRP side cache, MAX_LEVEL 3", CacheParams(32, 1, "hybrid", maxLevel = 3), CacheParams(8, 1, "dm"), seed = 37)
-  cacheCase("DM node + primitive cache, no DRAM jitter, host always ready", CacheParams(16, 1, "dm"), CacheParams(16, 1, "dm"),
+  cacheCase("direct-mapped node cache, 16 lines", CacheParams(16, 1, CachePolicy.Dm), none, seed = 31)
+  cacheCase("4-way true-LRU node cache + 2-way LRU primitive cache", CacheParams(32, 4, CachePolicy.Lru), CacheParams(32, 2, CachePolicy.Lru), seed = 32)
+  cacheCase("4-way tree-PLRU node cache + direct-mapped primitive cache", CacheParams(32, 4, CachePolicy.Plru), CacheParams(16, 1, CachePolicy.Dm), seed = 33)
+  cacheCase("level policy, direct-mapped, MAX_LEVEL 2", CacheParams(16, 1, CachePolicy.Lrp, maxLevel = 2), none, seed = 34, expectBypass = true)
+  cacheCase("level policy, 2-way LRU, MAX_LEVEL 1", CacheParams(16, 2, CachePolicy.Lrp, maxLevel = 1), none, seed = 35, expectBypass = true)
+  cacheCase("breadth-first static buffer of 16 nodes (preloaded)", CacheParams(16, 1, CachePolicy.Bf), none, seed = 36, expectBypass = true)
+  cacheCase("hybrid: DM + LRP side cache, MAX_LEVEL 3", CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 3), CacheParams(8, 1, CachePolicy.Dm), seed = 37)
+  cacheCase("DM node + primitive cache, no DRAM jitter, host always ready", CacheParams(16, 1, CachePolicy.Dm), CacheParams(16, 1, CachePolicy.Dm),
     seed = 38, jitter = 0, readyProb = 1.0)
 }

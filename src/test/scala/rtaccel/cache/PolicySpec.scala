@@ -1,5 +1,6 @@
 package rtaccel.cache
 
+import rtaccel.config.CachePolicy
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.cache.policy._
 
@@ -89,11 +90,13 @@ class PolicySpec extends AnyFunSuite {
     assert(LevelPolicy.allocate(40, 16, 15) && LevelPolicy.allocate(15, 40, 15), "levels beyond 15 encode as 15")
   }
 
-  test("Policies.byName") {
-    assert(Policies.byName("lru", 4) == TrueLru(4) && Policies.byName("plru", 8) == TreePlru(8) && Policies.byName("dm", 1) == DirectMapped)
-    assert(Policies.byName("lrp", 2) == TrueLru(2) && Policies.byName("lru", 1) == DirectMapped)
-    assertThrows[IllegalArgumentException](Policies.byName("fifo", 2))
-    assertThrows[IllegalArgumentException](Policies.byName("dm", 2))
-    assertThrows[IllegalArgumentException](Policies.byName("plru", 6))
+  test("Policies.of and CachePolicy.parse") {
+    import CachePolicy._
+    assert(Policies.of(Lru, 4) == TrueLru(4) && Policies.of(Plru, 8) == TreePlru(8) && Policies.of(Dm, 1) == DirectMapped)
+    assert(Policies.of(Lrp, 2) == TrueLru(2) && Policies.of(Lru, 1) == DirectMapped)
+    assert(CachePolicy.all.forall(p => CachePolicy.parse(p.name) == p) && CachePolicy.all.map(CachePolicy.code) == (0 to 5))
+    assertThrows[rtaccel.io.InputError](CachePolicy.parse("fifo"))
+    assertThrows[IllegalArgumentException](Policies.of(Dm, 2))
+    assertThrows[IllegalArgumentException](Policies.of(Plru, 6))
   }
 }

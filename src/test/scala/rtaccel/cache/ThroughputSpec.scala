@@ -1,7 +1,8 @@
 package rtaccel.cache
 
 import org.scalatest.funsuite.AnyFunSuite
-import rtaccel.config.{CacheParams, Presets}
+import rtaccel.cache.policy.LevelPolicy
+import rtaccel.config.{CacheParams, CachePolicy, HwLimits, Presets}
 
 class ThroughputSpec extends AnyFunSuite {
   test("MVA: one ray in flight takes the whole latency; many approach the busiest resource, never beyond") {
@@ -18,7 +19,7 @@ class ThroughputSpec extends AnyFunSuite {
   test("latency and demands from the replay: uncached stream by hand, and a cache adds its path latency") {
     val p = Presets.paper2017 // 128 B nodes, 64 B primitives, 40 cycles latency, 4 B/cycle sustained, 32 B beats
     def sink(cached: Boolean) = {
-      val s = new CacheSink(if (cached) Some(new CacheModel(CacheParams(8, 1, "dm"))) else None, None, 128, 64)
+      val s = new CacheSink(if (cached) Some(new CacheModel(CacheParams(8, 1, CachePolicy.Dm), LevelPolicy.paper)) else None, None, 128, 64)
       for (r <- 0 until 2) { s.node(r, 0, 0); s.node(r, 1, 1); s.leaf(r, 0, 3, 2) } // 2 rays: 2 nodes + a 3-prim leaf each
       s
     }
@@ -28,10 +29,12 @@ class ThroughputSpec extends AnyFunSuite {
     assert(u.dramCycles == (2 * 128 + 192) / 4.0)
     assert(u.beatCycles == (2 * 128 + 192) / 32.0)
     assert(math.abs(u.raysPerCycle - 1 / 232.0) < 1e-15)
-    val c = Throughput.predict(p, sink(cached = true), rays = 2, tus = 1)
-    // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses
-    val expect = (232.0 * 2 - 2 * 72 + 2 * 4 + 4 * Throughput.cachePathCycles) / 2
-    assert(c.latencyCycles == expect)
-    assert(c.dramCycles < u.dramCycles)
+    // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:
+    // (2 x 232 - 2 x 72 + 2 x 4 + 4 x path) / 2, by hand for two path latencies
+    for ((path, expect) <- Seq(8.0 -> 180.0, 5.0 -> 174.0)) {
+      val c = Throughput.predict(p.copy(hw = HwLimits(cachePathCycles = path)), sink(cached = true), rays = 2, tus = 1)
+      assert(c.latencyCycles == expect, s"cache path of $path cycles")
+      assert(c.dramCycles < u.dramCycles)
+    }
   }
 }

@@ -84,4 +84,28 @@ class CliSpec extends AnyFunSuite {
     for (i <- 0 until h1.count if h1.prim(i) != Hits.Overflow)
       assert(h0.prim(i) == h1.prim(i) && java.lang.Float.floatToRawIntBits(h0.t(i)) == java.lang.Float.floatToRawIntBits(h1.t(i)), s"ray $i")
   }
+
+  test("property: random bad flag lists are refused with one error line, status 2, nothing written") {
+    val r = new scala.util.Random(7)
+    val names = Flags.trace.map(_.name)
+    def word() = r.alphanumeric.take(1 + r.nextInt(8)).mkString
+    for (k <- 0 until 150) {
+      val out = dir.resolve(s"prop$k")
+      val base = Seq("--tris", tris.toString, "--rays", raysPath.toString, "--out", out.toString)
+      val n = names(r.nextInt(names.length))
+      val bad: Seq[String] = k % 6 match {
+        case 0 => Seq(s"--${n.patch(r.nextInt(n.length), word(), 1)}", "1")                 // misspelled flag
+        case 1 => Seq(s"--$n", "4", s"--$n", "4").filterNot(_ => Set("tris", "rays", "out")(n)) match {
+          case Nil => Seq("--m", "4", "--m", "2"); case x => x }                          // repeated flag
+        case 2 => Seq(Seq("--m", "--mppl", "--tus", "--stack-depth", "--node-cache", "--max-level")(r.nextInt(6)), word() + "x") // not an integer
+        case 3 => Seq("--m", (r.nextInt(20) + 9).toString)                                  // M out of range
+        case 4 => Seq(word())                                                             // stray word
+        case _ => Seq("--node-policy", "q" + word())                                      // unknown policy
+      }
+      val (code, stdout, err) = captured((base ++ bad).toArray)(Trace.main0)
+      assert(code == 2, s"case $k ${bad.mkString(" ")}: status $code")
+      assert(err.trim.linesIterator.count(_.startsWith("error: ")) == 1 && !err.contains("Exception"), s"case $k: $err")
+      assert(stdout.isEmpty && !Files.exists(out), s"case $k left output")
+    }
+  }
 }

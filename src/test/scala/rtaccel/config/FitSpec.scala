@@ -40,7 +40,11 @@ class FitSpec extends AnyFunSuite {
     assert(msg(PlatformParams(mppl = 17)).contains("lower MPPL or widen countBits"))
     assert(msg(PlatformParams(tus = 0)).contains("TUS"))
     assert(msg(CacheParams(entries = 100)).contains("power of two"))
-    assert(msg(CacheParams(policy = "fifo")).contains("dm|lru|plru|lrp|bf|hybrid"))
+    assert(intercept[rtaccel.io.InputError](CachePolicy.parse("fifo")).getMessage.contains("dm|lru|plru|lrp|bf|hybrid"))
+    assert(msg(PlatformParams(hw = HwLimits(cacheOutQueue = 2))).contains("output queue must be 3..64"))
+    assert(msg(PlatformParams(hw = HwLimits(levelCodeBits = 0))).contains("level code must be 1..6 bits"))
+    assert(msg(PlatformParams(hw = HwLimits(iuOutstanding = 0))).contains("IU outstanding jobs"))
+    assert(msg(PlatformParams(hw = HwLimits(axiAddrBits = 8))).contains("AXI address width"))
     assert(msg(PlatformParams(m = 8, nodeAccessBytesOverride = 128)).contains("smaller than a node"))
   }
 

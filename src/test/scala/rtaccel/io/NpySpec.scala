@@ -46,4 +46,35 @@ class NpySpec extends AnyFunSuite {
     assert(err(Scene.load(floats("inf.npy", Seq(1, 3, 3), nan))).contains("non-finite"))
     assert(err(Scene.load(floats("empty.npy", Seq(0, 3, 3), Array()))).contains("no triangles"))
   }
+
+  // Seeded random corruption of valid files: every damaged file is refused with an InputError (one line,
+  // what is wrong), never another exception, a hang or a silently wrong array.
+  test("property: random truncation, byte flips and header edits of .npy files give one InputError each") {
+    val r = new scala.util.Random(20261201)
+    val good = Files.readAllBytes(floats("good.npy", Seq(4, 8), Array.tabulate(32)(i => if (i % 8 == 5) 1f else 0.5f)))
+    val headerEnd = good.indexOf('\n'.toByte)
+    var refused = 0
+    for (k <- 0 until 600) {
+      val b = good.clone()
+      val bad: Array[Byte] = k % 4 match {
+        case 0 => b.take(r.nextInt(b.length - 1))                                  // truncated anywhere
+        case 1 => val i = r.nextInt(headerEnd + 1); b(i) = (r.nextInt(256) - 128).toByte; b // header byte flipped
+        case 2 => val h = new String(b, 0, headerEnd + 1, "latin1")                // shape or dtype edited
+          val edits = Seq("(4, 8)" -> s"(${r.nextInt(9)}, ${r.nextInt(12)})", "'<f4'" -> Seq("'<f8'", "'>f4'", "'<i4'", "'|u1'")(r.nextInt(4)),
+            "False" -> "True", "(4, 8)" -> "(4, 8, 2)")
+          val (from, to) = edits(r.nextInt(edits.length))
+          (h.replace(from, to).getBytes("latin1") ++ b.drop(headerEnd + 1))
+        case _ => Array.fill(r.nextInt(200))((r.nextInt(256) - 128).toByte)          // junk
+      }
+      val f = dir.resolve(s"fuzz$k.npy"); Files.write(f, bad)
+      try {
+        val rays = Rays.load(f)
+        // accepted: it must then be a well-formed (N, 8) float32 file whose payload is all there
+        assert(rays.count * 8 * 4 <= bad.length, s"case $k accepted a short payload")
+      } catch {
+        case e: InputError => refused += 1; assert(!e.getMessage.contains("\n"), s"case $k: multi-line message")
+      }
+    }
+    assert(refused > 400, s"only $refused of 600 corruptions refused")
+  }
 }

@@ -9,7 +9,8 @@ import chiseltest._
 import org.scalatest.flatspec.AnyFlatSpec
 import rtaccel.bvh.{MemoryImage, RefCodec}
 import rtaccel.config.{PlatformParams, RefFormat}
-import rtaccel.sim.{DramConfig, DramModel, ImageFile, MemTestImages}
+import rtaccel.host.{ImageFile, MemTestImages}
+import rtaccel.sim.{DramConfig, DramModel}
 
 /** A stand-in for a cache that makes DRAM order differ from request order: its requests wait in a queue and
   * leave only on cycles an LFSR allows (so the other path's later requests overtake them).

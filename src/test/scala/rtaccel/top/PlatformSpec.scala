@@ -3,7 +3,7 @@ package rtaccel.top
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
 import rtaccel.cli.{Cli, Simulate}
-import rtaccel.config.{CacheParams, Presets}
+import rtaccel.config.{CacheParams, CachePolicy, Presets}
 import rtaccel.model.MemFaults
 import rtaccel.scene.{Rays, Scene}
 
@@ -35,7 +35,7 @@ class PlatformSpec extends AnyFunSuite {
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
-    val base = if (Set("lrp", "hybrid")(node.policy) && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
+    val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
@@ -68,12 +68,12 @@ class PlatformSpec extends AnyFunSuite {
   // Caches (docs/caches.md): whole scene bit-exact, counts equal the model on the logged order, and no stale
   // line under random DRAM latency and host backpressure (a wrong beat would change a hit).
   private val cacheCases = Seq(
-    ("direct-mapped node + primitive caches", 4, CacheParams(64, 1, "dm"), CacheParams(64, 1, "dm"), 0, 0),
+    ("direct-mapped node + primitive caches", 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0),
     ("LRP 2-way node cache (MAX_LEVEL 3) + 2-way LRU primitive cache, jitter + backpressure", 8,
-      CacheParams(64, 2, "lrp", maxLevel = 3), CacheParams(32, 2, "lru"), 37, 40),
+      CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 37, 40),
     ("hybrid node cache (MAX_LEVEL 2) + PLRU 4-way primitive cache, jitter + backpressure", 4,
-      CacheParams(64, 1, "hybrid", maxLevel = 2), CacheParams(64, 4, "plru"), 23, 30),
-    ("breadth-first static node buffer (preloaded)", 2, CacheParams(16, 1, "bf"), CacheParams(), 11, 0))
+      CacheParams(64, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(64, 4, CachePolicy.Plru), 23, 30),
+    ("breadth-first static node buffer (preloaded)", 2, CacheParams(16, 1, CachePolicy.Bf), CacheParams(), 11, 0))
   for ((what, tus, node, prim, jitter, stall) <- cacheCases)
     test(s"caches, bit-exact and counting like the model: $what") {
       runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim)
@@ -88,7 +88,7 @@ class PlatformSpec extends AnyFunSuite {
   // Memory read errors (poisoned beats, the same set in the DRAM model and the model): exactly the rays that
   // read one are flagged prim -2, every other ray stays bit-exact; through caches, the poison stays cached.
   for ((what, tus, node, prim) <- Seq(("no cache", 4, CacheParams(), CacheParams()),
-      ("DM node + 2-way LRU primitive caches", 4, CacheParams(64, 1, "dm"), CacheParams(64, 2, "lru"))))
+      ("DM node + 2-way LRU primitive caches", 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 2, CachePolicy.Lru))))
     test(s"memory read errors flag exactly the affected rays, the rest bit-exact: $what") {
       // a seed whose poison spares the root node (a poisoned root fails every ray, which tests less)
       val rate = 0.003

@@ -42,4 +42,16 @@ class RegHeadersSpec extends AnyFunSuite {
     assert(j("cnt").num.toInt == RegMap.CounterBase + 8 * RtAccelTop.counterNames.indexOf("hits_out"))
     for ((r, v) <- RtAccelTop.configWords(p)) assert(BigInt(j("expect")(r.name).num.toLong) == v, r.name)
   }
+
+  test("docs/registers.md carries the register table of RegMap") {
+    val doc = java.nio.file.Paths.get("docs/registers.md")
+    val text = Files.readString(doc)
+    val (begin, end) = ("<!-- BEGIN register table -->\n", "<!-- END register table -->")
+    val i = text.indexOf(begin); val k = text.indexOf(end)
+    assert(i >= 0 && k > i, "docs/registers.md lost its table markers")
+    val current = text.substring(i + begin.length, k)
+    if (sys.env.get("RTACCEL_UPDATE_DOCS").contains("1") && current != RegHeaders.markdown)
+      Files.writeString(doc, text.substring(0, i + begin.length) + RegHeaders.markdown + text.substring(k))
+    else assert(current == RegHeaders.markdown, "docs/registers.md differs from RegMap; run with RTACCEL_UPDATE_DOCS=1")
+  }
 }

@@ -3,7 +3,7 @@ package rtaccel.cache.hw
 import chisel3._
 import chisel3.util._
 import rtaccel.cache.policy.Policies
-import rtaccel.config.CacheParams
+import rtaccel.config.{CacheParams, CachePolicy}
 import rtaccel.mc.{FetchBeat, FetchPath, FetchPathModule, McGeometry, PathReq}
 
 /** Geometry of one cache in front of a path. A line holds one request: a node, or a leaf of up to
@@ -16,8 +16,8 @@ final case class CacheGeometry(c: CacheParams, entriesPerLine: Int, lineBeats: I
   require(lines % c.ways == 0, s"cache ways (${c.ways}) must divide its lines ($lines)")
   val beatBits: Int = log2Ceil(lineBeats)
   /** hybrid: the complementary LRP cache beside the direct-mapped array (same sizes as CacheModel) */
-  val sideLines: Int = if (c.policy == "hybrid") math.max(1, lines / 8) else 0
-  val sideWays: Int = if (c.policy == "hybrid") math.min(4, sideLines) else 0
+  val sideLines: Int = if (c.policy == CachePolicy.Hybrid) math.max(1, lines / 8) else 0
+  val sideWays: Int = if (c.policy == CachePolicy.Hybrid) math.min(4, sideLines) else 0
   val dataLines: Int = lines + sideLines
 }
 
@@ -33,11 +33,13 @@ final case class CacheGeometry(c: CacheParams, entriesPerLine: Int, lineBeats: I
   * written and read only in ticket order, a hit always sees the line of the latest earlier fill, even when that
   * fill's DRAM data arrived after the hit was looked up (no stale or wrong data, whatever the latency).
   */
-class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extends FetchPathModule(g0) {
+class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g0) {
+  private val hw = g0.p.hw
+  private val tickets = hw.cacheTickets
   private val c = cg.c
   private val dataBits = g.axi.dataBits
-  private val isBf = c.policy == "bf"
-  private val isHybrid = c.policy == "hybrid"
+  private val isBf = c.policy == CachePolicy.Bf
+  private val isHybrid = c.policy == CachePolicy.Hybrid
   private val lineBits = log2Ceil(cg.dataLines)
 
   class Ticket extends Bundle {
@@ -48,7 +50,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
     val beats = UInt(g.beatsBits.W)
   }
   val ticketQ = Module(new Queue(new Ticket, tickets))
-  val missQ = Module(new Queue(g.memReq, 4))
+  val missQ = Module(new Queue(g.memReq, hw.cacheMissQueue))
   io.memReq <> missQ.io.deq
 
   val hits = RegInit(0.U(48.W)); val misses = RegInit(0.U(48.W)); val bypasses = RegInit(0.U(48.W))
@@ -72,9 +74,9 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
     fill := false.B
     dataLine := s1.line(math.max(1, lineBits) - 1, 0)
   } else {
-    val mainPol = Policies.byName(if (isHybrid) "dm" else c.policy, c.ways)
-    val main = new TagArray(cg.lines / c.ways, mainPol, lrp = c.policy == "lrp" || isHybrid)
-    val arrays = Seq(main) ++ (if (isHybrid) Seq(new TagArray(cg.sideLines / cg.sideWays, Policies.byName("lru", cg.sideWays), lrp = true)) else Nil)
+    val mainPol = Policies.of(if (isHybrid) CachePolicy.Dm else c.policy, c.ways)
+    val main = new TagArray(cg.lines / c.ways, mainPol, lrp = c.policy.levelAware, hw.levelCodeBits)
+    val arrays = Seq(main) ++ (if (isHybrid) Seq(new TagArray(cg.sideLines / cg.sideWays, Policies.of(CachePolicy.Lru, cg.sideWays), lrp = true, hw.levelCodeBits)) else Nil)
     val entries = arrays.map(_.read(lookLine))
     val ds = arrays.zip(entries).map { case (a, e) => a.decide(e, s1.line, s1.level, io.maxLevel) }
     // data line of (set, way): set * ways + way, after `base` lines of the arrays before this one
@@ -153,7 +155,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
   // ---------------------------------------------------------------- data: tickets strictly in order
   // each beat is stored with its error bit (MSB): a poisoned beat stays poisoned while it is cached
   val data = SyncReadMem(cg.dataLines << cg.beatBits, UInt((dataBits + 1).W))
-  val outQ = Module(new Queue(new FetchBeat(dataBits), 4))
+  val outQ = Module(new Queue(new FetchBeat(dataBits), hw.cacheOutQueue))
   io.out <> outQ.io.deq
   val head = ticketQ.io.deq.bits
   val beat = RegInit(0.U(g.beatsBits.W))
@@ -162,7 +164,8 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, tickets: Int = 32) extend
 
   // a data RAM read issued last cycle lands in outQ this cycle; reads are issued only when outQ will have room
   val inflight = RegInit(false.B); val inflightLast = Reg(Bool())
-  val readIssue = ticketQ.io.deq.valid && head.hit && (outQ.io.count +& inflight.asUInt) <= 2.U
+  // room for the read in flight and this one: at most depth - 2 beats queued or landing
+  val readIssue = ticketQ.io.deq.valid && head.hit && (outQ.io.count +& inflight.asUInt) <= (hw.cacheOutQueue - 2).U
   val rd = data.read(addr(head.line, beat), readIssue)
   inflight := readIssue; when(readIssue) { inflightLast := lastBeat }
 
@@ -191,11 +194,11 @@ object CachePath {
     def fail(msg: String) = throw new rtaccel.io.InputError(msg)
     rtaccel.config.Fit.checkLevelField(p)
     for ((what, c) <- Seq("NODE" -> p.nodeCache, "PRIM" -> p.primCache) if c.entries > 0) {
-      val pol = try Policies.byName(c.policy, c.ways) catch { case e: IllegalArgumentException => fail(s"${what}_POLICY: ${e.getMessage.stripPrefix("requirement failed: ")}") }
+      val pol = try Policies.of(c.policy, c.ways) catch { case e: IllegalArgumentException => fail(s"${what}_POLICY: ${e.getMessage.stripPrefix("requirement failed: ")}") }
       if (pol.stateBits > PolicyTables.MaxStateBits)
         fail(s"${what}_WAYS=${c.ways} with ${c.policy}: the RTL tabulates at most ${PolicyTables.MaxStateBits} state bits per set (true LRU up to 4 ways, PLRU up to 8); use fewer ways or make cachesim")
     }
-    if (p.primCache.entries > 0 && !Set("dm", "lru", "plru")(p.primCache.policy))
+    if (p.primCache.entries > 0 && !CachePolicy.primRtl(p.primCache.policy))
       fail(s"PRIM_POLICY=${p.primCache.policy} is not built in RTL (leaf references carry no level, and the static buffer preloads nodes); use dm|lru|plru, or make cachesim for the model")
     if (p.primCache.entries > 0 && p.primCache.entries < p.mppl)
       fail(s"PRIM_CACHE=${p.primCache.entries} holds less than one leaf of MPPL=${p.mppl} primitives; use at least ${p.mppl}")

@@ -35,9 +35,15 @@ object PolicyTables {
     if (pol.stateBits == 0 || pol.ways == 1) 0.U
     else VecInit(rows(pol)(pol.victim).map(_.U(log2Ceil(pol.ways).W)))(state(pol.stateBits - 1, 0))
 
-  /** LevelPolicy.allocate(victimLevel, incomingLevel, maxLevel) for 4-bit levels and a runtime MAX_LEVEL. */
+  /** LevelPolicy.allocate(victimLevel, incomingLevel, maxLevel) for level codes as wide as the inputs and a
+    * runtime MAX_LEVEL: the class of every (MAX_LEVEL, level) pair, tabulated.
+    */
   def allocate(victimLevel: UInt, incomingLevel: UInt, maxLevel: UInt): Bool = {
-    val t = VecInit(Seq.tabulate(16)(ml => VecInit(Seq.tabulate(16)(l => LevelPolicy.cls(l, ml).U(5.W)))))
+    val bits = incomingLevel.getWidth
+    require(victimLevel.getWidth == bits && maxLevel.getWidth == bits, "levels and MAX_LEVEL must share the level code width")
+    val code = LevelPolicy.Code(bits)
+    val n = 1 << bits
+    val t = VecInit(Seq.tabulate(n)(ml => VecInit(Seq.tabulate(n)(l => code.cls(l, ml).U((bits + 1).W)))))
     t(maxLevel)(incomingLevel) <= t(maxLevel)(victimLevel)
   }
 }

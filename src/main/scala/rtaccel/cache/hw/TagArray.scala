@@ -4,16 +4,16 @@ import chisel3._
 import chisel3.util._
 import rtaccel.cache.policy.ReplacementPolicy
 
-/** One way of a set: valid, tag and the 4-bit level code of the line it holds. */
-class WayEntry(tagBits: Int) extends Bundle {
+/** One way of a set: valid, tag and the level code (hw.levelCodeBits) of the line it holds. */
+class WayEntry(tagBits: Int, levelBits: Int) extends Bundle {
   val valid = Bool()
   val tag = UInt(tagBits.W)
-  val level = UInt(4.W)
+  val level = UInt(levelBits.W)
 }
 
 /** A set: its ways and the replacement state (one RAM word, read and written whole). */
-class SetEntry(ways: Int, tagBits: Int, stateBits: Int) extends Bundle {
-  val way = Vec(ways, new WayEntry(tagBits))
+class SetEntry(ways: Int, tagBits: Int, stateBits: Int, levelBits: Int) extends Bundle {
+  val way = Vec(ways, new WayEntry(tagBits, levelBits))
   val state = UInt(stateBits.W) // zero-width (removed) for direct-mapped sets
 }
 
@@ -29,12 +29,12 @@ final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: Set
   * Protocol: `read(line)` in one cycle, the `Decision` on the next (the data stays valid while the same set
   * is read again each cycle), `write` when the decision is taken.
   */
-class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean) {
+class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBits: Int) {
   PolicyTables.check(pol)
   val ways: Int = pol.ways
   val setBits: Int = log2Ceil(sets)
   val tagBits: Int = 32 - setBits
-  private def entryType = new SetEntry(ways, tagBits, pol.stateBits)
+  private def entryType = new SetEntry(ways, tagBits, pol.stateBits, levelBits)
   private val mem = SyncReadMem(sets, entryType)
 
   def setOf(line: UInt): UInt = if (setBits == 0) 0.U(1.W) else line(setBits - 1, 0)

@@ -89,28 +89,36 @@ final case class TreePlru(ways: Int) extends ReplacementPolicy {
 }
 
 /** The level replacement policy (paper Section 7; our exact rule, Section 7.1 of our copy is missing).
-  * Levels are first encoded as the 4-bit hardware field (0..14 as is, 15 and deeper as 15), then put in a
-  * priority class: class(l) = min(l, maxLevel + 1). A missing line may replace the victim only if its class
-  * is the same or higher (numerically <=) than the victim's; otherwise the access bypasses the cache.
-  * Within one class the replacement policy (LRU) alone decides. An empty victim is always replaced.
+  * Levels are first encoded as the hardware field of `bits` bits (paper: 4, so 0..14 as is, 15 and deeper as
+  * 15), then put in a priority class: class(l) = min(l, maxLevel + 1). A missing line may replace the victim
+  * only if its class is the same or higher (numerically <=) than the victim's; otherwise the access bypasses
+  * the cache. Within one class the replacement policy (LRU) alone decides. An empty victim is always replaced.
   */
 object LevelPolicy {
-  def encode(level: Int): Int = if (level < 0) 0 else if (level > 15) 15 else level
-  def cls(level: Int, maxLevel: Int): Int = math.min(encode(level), maxLevel + 1)
-  def allocate(victimLevel: Int, incomingLevel: Int, maxLevel: Int): Boolean =
-    cls(incomingLevel, maxLevel) <= cls(victimLevel, maxLevel)
+  final case class Code(bits: Int) {
+    require(bits >= 1 && bits <= 6, s"level code must be 1..6 bits (got $bits)")
+    val max: Int = (1 << bits) - 1
+    def encode(level: Int): Int = if (level < 0) 0 else if (level > max) max else level
+    def cls(level: Int, maxLevel: Int): Int = math.min(encode(level), maxLevel + 1)
+    def allocate(victimLevel: Int, incomingLevel: Int, maxLevel: Int): Boolean =
+      cls(incomingLevel, maxLevel) <= cls(victimLevel, maxLevel)
+  }
+  /** the paper's 4-bit code (PlatformParams.hw.levelCodeBits default) */
+  val paper: Code = Code(4)
+  def encode(level: Int): Int = paper.encode(level)
+  def cls(level: Int, maxLevel: Int): Int = paper.cls(level, maxLevel)
+  def allocate(victimLevel: Int, incomingLevel: Int, maxLevel: Int): Boolean = paper.allocate(victimLevel, incomingLevel, maxLevel)
 }
 
 object Policies {
-  val names: Seq[String] = Seq("dm", "lru", "plru", "lrp", "bf", "hybrid")
-  /** Replacement policy of one set for a named cache policy. lrp uses true LRU (plus LevelPolicy on allocation),
+  import rtaccel.config.CachePolicy._
+  /** Replacement policy of one set for a cache policy. lrp uses true LRU (plus LevelPolicy on allocation),
     * hybrid's main array is direct-mapped, bf never replaces (its static buffer keeps DirectMapped's trivial state).
     */
-  def byName(name: String, ways: Int): ReplacementPolicy = name match {
-    case "dm" | "bf" | "hybrid" =>
-      require(ways == 1, s"policy '$name' is direct-mapped/static: ways must be 1 (got $ways)"); DirectMapped
-    case "lru" | "lrp" => if (ways == 1) DirectMapped else TrueLru(ways)
-    case "plru" => if (ways == 1) DirectMapped else TreePlru(ways)
-    case other => throw new IllegalArgumentException(s"unknown cache policy '$other'; use ${names.mkString("|")}")
+  def of(policy: rtaccel.config.CachePolicy, ways: Int): ReplacementPolicy = policy match {
+    case Dm | Bf | Hybrid =>
+      require(ways == 1, s"policy '$policy' is direct-mapped/static: ways must be 1 (got $ways)"); DirectMapped
+    case Lru | Lrp => if (ways == 1) DirectMapped else TrueLru(ways)
+    case Plru => if (ways == 1) DirectMapped else TreePlru(ways)
   }
 }

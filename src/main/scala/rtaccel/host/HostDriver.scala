@@ -1,4 +1,4 @@
-package rtaccel.sim
+package rtaccel.host
 
 import chisel3._
 import chiseltest._

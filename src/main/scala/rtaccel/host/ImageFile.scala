@@ -1,4 +1,4 @@
-package rtaccel.sim
+package rtaccel.host
 
 import java.io.{BufferedWriter, OutputStreamWriter}
 import java.nio.charset.StandardCharsets

@@ -1,4 +1,4 @@
-package rtaccel.sim
+package rtaccel.host
 
 import java.nio.file.Path
 import rtaccel.io.Npy

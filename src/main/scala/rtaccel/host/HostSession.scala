@@ -1,4 +1,4 @@
-package rtaccel.sim
+package rtaccel.host
 
 import rtaccel.config.PlatformParams
 import rtaccel.io.InputError

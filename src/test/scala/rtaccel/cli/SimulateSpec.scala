@@ -1,0 +1,68 @@
+package rtaccel.cli
+
+import java.nio.file.{Files, Path}
+import org.scalatest.funsuite.AnyFunSuite
+import rtaccel.TestScenes
+
+/** make simulate as a command: exit statuses, the JSON contract, waveforms on request (Verilator). */
+class SimulateSpec extends AnyFunSuite {
+  private val dir = Files.createTempDirectory("simulatespec")
+  private val (tris, raysPath) = TestScenes.writeInputs(dir, TestScenes.soup(41, 200), TestScenes.rays(42, 60))
+  private def sim(out: Path, extra: String*): (Int, String, String) = {
+    val so = new java.io.ByteArrayOutputStream(); val se = new java.io.ByteArrayOutputStream()
+    val argv = Array("--tris", tris.toString, "--rays", raysPath.toString, "--out", out.toString, "--config", "small",
+      "--tus", "2") ++ extra
+    val code = Console.withOut(so)(Console.withErr(se)(Cli.status(argv, Flags.simulate)(Simulate.main0)))
+    (code, so.toString, se.toString)
+  }
+  private def last(s: String) = ujson.read(s.trim.linesIterator.toSeq.last)
+
+  test("a run whose check fails (cycle limit reached) exits 3, keeps its outputs and names the failure") {
+    val out = dir.resolve("timeout")
+    val (code, stdout, err) = sim(out, "--max-cycles", "2000")
+    assert(code == 3, err)
+    val j = last(stdout)
+    assert(!j("ok").bool && j("failures").arr.map(_.str).contains("timeout") && j("timed_out").bool, ujson.write(j))
+    assert(Files.exists(out.resolve("hits.npy")) && Files.exists(out.resolve("summary.json")))
+    assert(err.linesIterator.exists(_.startsWith("error: check failed: ")), err)
+  }
+
+  test("a clean run exits 0 with ok and no failures; the board's status agrees") {
+    val out = dir.resolve("clean")
+    val (code, stdout, err) = sim(out)
+    assert(code == 0, err)
+    val j = last(stdout)
+    assert(j("ok").bool && j("failures").arr.isEmpty && j("status")("done").bool && !j("status")("busy").bool)
+    assert(j("irq_done").bool && j("counters")("hits_out").num == 60 && j("counters")("rays_in").num == 60)
+  }
+
+  test("WAVES=1 writes the asked cycle window as a VCD: values at its first cycle, changes up to its last") {
+    val out = dir.resolve("waves")
+    val (code, stdout, err) = sim(out, "--waves", "1", "--waves-from", "100", "--waves-to", "160")
+    assert(code == 0, err)
+    val w = last(stdout)("waves")
+    val vcd = Files.readAllLines(out.resolve("waves.vcd")).toArray(Array[String]()).toSeq
+    val times = vcd.filter(_.startsWith("#")).map(_.drop(1).toLong)
+    assert(vcd.exists(_.contains("$enddefinitions")) && vcd.contains("$dumpvars") && w("signals").num > 100)
+    val period = times.sliding(2).collect { case Seq(a, b) if b > a => b - a }.min * 2 // two edges per cycle
+    assert(times.head == 100 * period, s"window starts at ${times.head}, period $period")
+    assert(times.last < 161 * period && times.last >= 160 * period, s"window ends at ${times.last}")
+    assert(w("changes").num > 0)
+    val (c2, _, e2) = sim(dir.resolve("badwaves"), "--waves", "1", "--waves-from", "50", "--waves-to", "10")
+    assert(c2 == 2 && e2.contains("WAVES_TO"), e2)
+  }
+
+  test("short soak: the cornell fixture's golden rays at 8 TUs with a cache, DRAM jitter and host backpressure") {
+    val root = TestScenes.fixtureRoot
+    assume(root.isDefined, "procedural fixtures absent: run make fixtures")
+    val d = root.get.resolve("cornell")
+    val out = dir.resolve("soak")
+    val so = new java.io.ByteArrayOutputStream(); val se = new java.io.ByteArrayOutputStream()
+    val code = Console.withOut(so)(Console.withErr(se)(Cli.status(Array("--tris", d.resolve("tris.npy").toString,
+      "--rays", d.resolve("golden/rays.npy").toString, "--out", out.toString, "--config", "paper2017", "--tus", "8",
+      "--node-cache", "256", "--mem-jitter", "31", "--host-stall", "35"), Flags.simulate)(Simulate.main0)))
+    val j = last(so.toString)
+    info(f"${j("rays").num}%.0f rays, ${j("cycles").num}%.0f cycles, ${j("sim_wall_s").num}%.1f s simulated")
+    assert(code == 0 && j("mismatch_vs_model").num == 0 && j("lost").num == 0 && j("duplicated").num == 0, se.toString)
+  }
+}
