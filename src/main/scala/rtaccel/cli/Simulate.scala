@@ -7,7 +7,7 @@ import chiseltest.internal.CachingAnnotation
 import chiseltest.simulator.{VerilatorBackendAnnotation, VerilatorCFlags}
 import firrtl2.options.TargetDirAnnotation
 import rtaccel.bvh.MemoryImage
-import rtaccel.config.PlatformParams
+import rtaccel.config.{HwLimits, PlatformParams}
 import rtaccel.io.InputError
 import rtaccel.mc.AxiParams
 import rtaccel.cache.hw.CachePath
@@ -85,6 +85,40 @@ object Simulate {
       a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp, a.double("mem-error-rate", 0.0), wavesArg(a)))
   }
 
+  /** The hit stream as the host captured it, by ray id: each record, how often it came, its fault flags. */
+  final case class RtlHits(hits: Hits, seen: Array[Int], overflow: Array[Boolean], readError: Array[Boolean])
+
+  private def readHits(dut: SimHarness, received: Long, count: Int): RtlHits = {
+    val r = RtlHits(Hits.empty(count), new Array[Int](count), new Array[Boolean](count), new Array[Boolean](count))
+    for (k <- 0 until math.min(received, count.toLong).toInt) {
+      dut.io.readIdx.poke(k.U)
+      val w = dut.io.readData.peek().litValue
+      def word(i: Int) = ((w >> (32 * i)) & 0xffffffffL).toLong.toInt
+      val id = word(0)
+      if (id >= 0 && id < count) {
+        r.seen(id) += 1
+        r.hits.t(id) = java.lang.Float.intBitsToFloat(word(1)); r.hits.prim(id) = word(2)
+        r.hits.u(id) = java.lang.Float.intBitsToFloat(word(3)); r.hits.v(id) = java.lang.Float.intBitsToFloat(word(4))
+        r.overflow(id) = (word(5) & 1) != 0; r.readError(id) = (word(5) & 2) != 0
+      }
+    }
+    r
+  }
+
+  /** RTL against the model, ray by ray: raw bits of every field, and each fault flag against the model's record. */
+  final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int)
+
+  private def compare(rtl: RtlHits, model: Hits): Comparison = {
+    def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
+    val h = rtl.hits; val got = rtl.seen.indices.filter(rtl.seen(_) >= 1)
+    Comparison(
+      mismatch = got.count(i => h.prim(i) != model.prim(i) || bits(h.t(i)) != bits(model.t(i)) ||
+        bits(h.u(i)) != bits(model.u(i)) || bits(h.v(i)) != bits(model.v(i))),
+      lost = rtl.seen.count(_ == 0),
+      overflowDisagree = got.count(i => rtl.overflow(i) != (model.prim(i) == Hits.Overflow)),
+      readErrorDisagree = got.count(i => rtl.readError(i) != (model.prim(i) == Hits.ReadError)))
+  }
+
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
   def run(b: Cli.Built, rays: Rays, o: SimOptions): Outcome = {
     val p = b.params
@@ -112,7 +146,7 @@ object Simulate {
     val key = s"tus${p.tus}-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
       s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" + (if (o.errorThreshold > 0) s"-err${o.errorThreshold}" else "") +
-      (if (o.waves.isDefined) "-vcd" else "") +
+      (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "")
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
@@ -154,30 +188,11 @@ object Simulate {
       val finish = HostSession.finish(host)
       val counters = finish.counters
       val cycles = counters("batch_cycles")
-      // results, by ray id
-      val hits = Hits.empty(rays.count)
-      val seen = new Array[Int](rays.count)
-      val rtlOverflow = new Array[Boolean](rays.count)
-      val rtlReadError = new Array[Boolean](rays.count)
-      for (k <- 0 until math.min(received, rays.count.toLong).toInt) {
-        dut.io.readIdx.poke(k.U)
-        val w = dut.io.readData.peek().litValue
-        def word(i: Int) = ((w >> (32 * i)) & 0xffffffffL).toLong.toInt
-        val id = word(0)
-        if (id >= 0 && id < rays.count) {
-          seen(id) += 1
-          hits.t(id) = java.lang.Float.intBitsToFloat(word(1)); hits.prim(id) = word(2)
-          hits.u(id) = java.lang.Float.intBitsToFloat(word(3)); hits.v(id) = java.lang.Float.intBitsToFloat(word(4))
-          if ((word(5) & 1) != 0) rtlOverflow(id) = true
-          if ((word(5) & 2) != 0) rtlReadError(id) = true
-        }
-      }
-      def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
-      val mismatch = (0 until rays.count).count(i => seen(i) >= 1 && (hits.prim(i) != model.prim(i) ||
-        bits(hits.t(i)) != bits(model.t(i)) || bits(hits.u(i)) != bits(model.u(i)) || bits(hits.v(i)) != bits(model.v(i))))
-      val lost = seen.count(_ == 0)
-      val overflowDisagree = (0 until rays.count).count(i => seen(i) >= 1 && rtlOverflow(i) != (model.prim(i) == Hits.Overflow))
-      val readErrorDisagree = (0 until rays.count).count(i => seen(i) >= 1 && rtlReadError(i) != (model.prim(i) == Hits.ReadError))
+      val rtl = readHits(dut, received, rays.count)
+      val hits = rtl.hits
+      val cmp = compare(rtl, model)
+      import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree}
+      val (rtlOverflow, rtlReadError) = (rtl.overflow, rtl.readError)
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
       // and against the model's N-TU interleaved order (the fast model's prediction)
       val logged = if (!cached) Array.empty[Int] else {
@@ -186,7 +201,7 @@ object Simulate {
         Array.tabulate(nLog) { k => dut.io.readIdx.poke(k.U); dut.io.logData.peek().litValue.toInt }
       }
       val cacheJson = CacheReport.simulate(p, counters, logged, accessRows, img.codec)
-      val duplicated = seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
+      val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond
       val json = ujson.Obj(

@@ -38,7 +38,7 @@ object RegMap {
     Field("STACK_DEPTH", 0, 16, "entries per TU stack"), Field("LEVEL_BITS", 16, 4, "level field of a node reference"),
     Field("COUNT_BITS", 20, 4, "leaf count field"), Field("NODE_ID_BITS", 24, 8, "node id field")))
   val NodeCache = Reg("NODE_CACHE", 0x010, RO, "node cache geometry", Seq(
-    Field("LOG2_ENTRIES", 0, 5, "log2 of the entries (valid when PRESENT)"), Field("PRESENT", 5, 1, "a node cache is built"),
+    Field("LOG2_ENTRIES", 0, 5, "log2 of the entries (valid when PRESENT)"), Field("PRESENT", 5, 1, "the cache is built"),
     Field("WAYS", 8, 8, "ways"), Field("POLICY", 16, 4, "0 dm, 1 lru, 2 plru, 3 lrp, 4 bf, 5 hybrid")))
   val PrimCache = Reg("PRIM_CACHE", 0x014, RO, "primitive cache geometry (fields as NODE_CACHE)", NodeCache.fields)
   val Formats = Reg("FORMATS", 0x018, RO, "arithmetic and memory formats", Seq(
@@ -56,7 +56,8 @@ object RegMap {
   val IrqEnable = Reg("IRQ_ENABLE", 0x028, RW, "interrupt enables (irq = IRQ_STATUS & IRQ_ENABLE)", Seq(
     Field("DONE", 0, 1, "batch done"), Field("ERROR", 1, 1, "a read error or an overflow")))
   val IrqStatus = Reg("IRQ_STATUS", 0x02C, W1C, "pending interrupts", IrqEnable.fields)
-  val MaxLevel = Reg("MAX_LEVEL", 0x030, RW, "MAX_LEVEL of the level replacement policy", Seq(Field("VALUE", 0, 4, "")))
+  val MaxLevel = Reg("MAX_LEVEL", 0x030, RW, "MAX_LEVEL of the level replacement policy",
+    Seq(Field("VALUE", 0, 6, "the low hw.levelCodeBits bits are kept (4 on the paper's platform)")))
   val RayCount = Reg("RAY_COUNT", 0x034, RW, "rays in the next batch")
   val PrimBaseLo = Reg("PRIM_BASE_LO", 0x038, RW, "byte address of primitive slot 0, low word")
   val PrimBaseHi = Reg("PRIM_BASE_HI", 0x03C, RW, "byte address of primitive slot 0, high word")
