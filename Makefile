@@ -109,12 +109,18 @@ analyze: deps
 	  T=$(TRIS) && $(JAVA) rtaccel.cli.Analyze --tris "$$T" --scene-label $(SCENE) --rays $$G/rays.npy --out $$OUT $(MODEL_ARGS) && \
 	  $(PY) -m dse.plot_analysis $$OUT >&2 && echo "[analyze] CSV and PNG in $$OUT" >&2
 
+# The loop every multi-scene target shares: for each mesh s of $(1) (absent: skipped with a note naming
+# $(2), or an error when $(6) is "strict"), n = its name, G = $(3); the golden frame $(4) x $(5) (DEPTH, SEED)
+# is made in G unless G/rays.npy exists and is newer than the mesh. The commands after the call see s, n, G
+# and end with `done`.
+SCENE_LOOP = for s in $(1); do \
+	  if [ ! -f "$$s" ]; then $(if $(filter strict,$(6)),echo "error: scene '$$s' not found; give SCENE=<path to .obj or .ply>" >&2; exit 2,echo "[$(2)] skip $$s (absent)"; continue); fi; \
+	  n=$$(basename $$s .obj); n=$$(basename $$n .ply); G=$(3); \
+	  [ "$$G/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=$(4) HEIGHT=$(5) >/dev/null || exit $$?;
+
 BENCH_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
 bench: deps
-	@for s in $(BENCH_SCENES); do \
-	  [ -f "$$s" ] || { echo "[bench] skip $$s (absent)"; continue; }; \
-	  n=$$(basename $$s .obj); G=build/bench/$$n/golden; \
-	  [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=128 HEIGHT=96 >/dev/null || exit $$?; \
+	@$(call SCENE_LOOP,$(BENCH_SCENES),bench,build/bench/$$n/golden,128,96) \
 	  T=$$(tools/tris $$s); \
 	  $(JAVA) rtaccel.cli.Bench --tris "$$T" --scene-label $$s --rays $$G/rays.npy $(MODEL_ARGS) > build/bench/$$n/model.json || exit $$?; \
 	  $(PY) -m golden.bench --scene $$s --rays $$G/rays.npy > build/bench/$$n/embree.json || exit $$?; \
@@ -126,10 +132,8 @@ bench: deps
 BENCH_CACHE_TUS ?= 1 8 32
 BENCH_NODE_CACHE ?= 8192
 bench-caches: deps
-	@set -o pipefail; for s in $(BENCH_SCENES); do \
-	  [ -f "$$s" ] || { echo "[bench-caches] skip $$s (absent)"; continue; }; \
-	  n=$$(basename $$s .obj); d=build/bench-caches/$$n-node$(BENCH_NODE_CACHE); G=build/bench-caches/$$n/golden; mkdir -p $$d; \
-	  [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=32 HEIGHT=24 >/dev/null || exit $$?; \
+	@set -o pipefail; $(call SCENE_LOOP,$(BENCH_SCENES),bench-caches,build/bench-caches/$$n/golden,32,24) \
+	  d=build/bench-caches/$$n-node$(BENCH_NODE_CACHE); mkdir -p $$d; \
 	  for t in $(BENCH_CACHE_TUS); do echo "[bench-caches] $$n TUS=$$t" >&2; \
 	    $(MAKE) --no-print-directory simulate SCENE=$$s GOLDEN=$$G CONFIG=paper2017 TUS=$$t NODE_CACHE=$(BENCH_NODE_CACHE) OUT=$$d/sim-tu$$t \
 	      | tail -n 1 > $$d/sim-tu$$t.json || exit $$?; \
@@ -171,9 +175,8 @@ regress: deps
 NOCACHE_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
 NOCACHE_TUS ?= 1,2,4,8,16,32
 paper-nocache: deps
-	@mkdir -p build/paper-nocache; csvs=""; for s in $(NOCACHE_SCENES); do \
-	  [ -f "$$s" ] || { echo "[paper-nocache] skip $$s (absent)"; continue; }; n=$$(basename $$s .obj); d=build/paper-nocache/$$n; \
-	  [ -f $$d/golden/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$d/golden WIDTH=32 HEIGHT=24 >/dev/null || exit $$?; \
+	@mkdir -p build/paper-nocache; csvs=""; $(call SCENE_LOOP,$(NOCACHE_SCENES),paper-nocache,build/paper-nocache/$$n/golden,32,24) \
+	  d=build/paper-nocache/$$n; \
 	  T=$$(tools/tris $$s); $(JAVA) rtaccel.cli.SweepTus --tris "$$T" --scene-label $$s --rays $$d/golden/rays.npy --out $$d \
 	    --config paper2017 --node-cache 0 --m $(or $(M),4) --mppl $(or $(MPPL),4) --tus-list $(NOCACHE_TUS) || exit $$?; csvs="$$csvs $$d/tus_sweep.csv"; done; \
 	  [ -z "$$csvs" ] || $(PY) -m dse.plot_tus build/paper-nocache/tus_sweep.png $$csvs
@@ -192,12 +195,9 @@ PAPER_TUS_WIDTH  ?= 32
 PAPER_TUS_HEIGHT ?= 24
 PAPER_RUN_SCENES = $(if $(filter command line,$(origin SCENE)),$(SCENE),$(PAPER_SCENES))
 paper-caches: deps
-	@mkdir -p build/paper-caches; f11=""; f89=""; tus=""; one="$(filter command line,$(origin SCENE))"; \
-	for s in $(PAPER_RUN_SCENES); do \
-	  [ -f "$$s" ] || [ -z "$$one" ] || { echo "error: scene '$$s' not found; give SCENE=<path to .obj or .ply>" >&2; exit 2; }; \
-	  [ -f "$$s" ] || { echo "[paper-caches] skip $$s (absent)"; continue; }; \
-	  n=$$(basename $$s .obj); n=$$(basename $$n .ply); d=build/paper-caches/$$n; G=$$d/golden/$(PAPER_WIDTH)x$(PAPER_HEIGHT)-d$(DEPTH)-s$(SEED); \
-	  [ "$$G/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=$(PAPER_WIDTH) HEIGHT=$(PAPER_HEIGHT) >/dev/null || exit $$?; \
+	@mkdir -p build/paper-caches; f11=""; f89=""; tus=""; \
+	$(call SCENE_LOOP,$(PAPER_RUN_SCENES),paper-caches,build/paper-caches/$$n/golden/$(PAPER_WIDTH)x$(PAPER_HEIGHT)-d$(DEPTH)-s$(SEED),$(PAPER_WIDTH),$(PAPER_HEIGHT),$(if $(filter command line,$(origin SCENE)),strict)) \
+	  d=build/paper-caches/$$n; \
 	  GT=$$d/golden/$(PAPER_TUS_WIDTH)x$(PAPER_TUS_HEIGHT)-d$(DEPTH)-s$(SEED); \
 	  [ -z "$(PAPER_TUS)" ] || [ "$$GT/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$GT WIDTH=$(PAPER_TUS_WIDTH) HEIGHT=$(PAPER_TUS_HEIGHT) >/dev/null || exit $$?; \
 	  T=$$(tools/tris $$s) || exit $$?; \
