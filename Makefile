@@ -30,7 +30,7 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        verilog lint simulate soak regress paper-nocache paper-caches bench-caches
+        yosys verilog lint simulate soak regress paper-nocache paper-caches bench-caches
 
 help:
 	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | paper-nocache | paper-caches   (see README.md)"
@@ -48,6 +48,11 @@ venv: .venv/.stamp
 verilator:
 	@command -v verilator >/dev/null || { echo "[deps] installing verilator from apt"; \
 	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq verilator >/dev/null; }
+
+# Yosys reads the emitted Verilog in make test (and synthesizes it in make area).
+yosys:
+	@command -v yosys >/dev/null || { echo "[deps] installing yosys from apt"; \
+	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq yosys >/dev/null; }
 
 # Compiles the Scala side and records its runtime classpath so entry points start as plain `java`.
 $(CP_FILE): $(SCALA_SRC)
@@ -221,7 +226,7 @@ $(FIXTURES): $(wildcard scenes/*.py golden/*.py) | venv
 	  $(PY) -m golden.export --scene $$d/scene.obj --out $$d/golden --width 32 --height 24 --depth 3 --seed 7 >/dev/null; done
 	touch $@
 
-test: deps fixtures
+test: deps yosys fixtures
 	@rm -rf build/test-reports; mkdir -p build/test-reports/python
 	@rc=0; \
 	RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=1; \

@@ -8,6 +8,8 @@ import rtaccel.top.RtAccelTop
   * file per module under OUT, through firtool.
   */
 object EmitVerilog {
+  val LoweringOptions = "--lowering-options=disallowLocalVariables,disallowPackedArrays"
+
   def main(args: Array[String]): Unit = Cli.run(args, Flags.verilog)(main0)
 
   def main0(a: Args): Unit = {
@@ -25,7 +27,10 @@ object EmitVerilog {
       Array("--target-dir", out.toString, "--target", "systemverilog", "--split-verilog") ++
         (if (sys.env.contains("RTACCEL_DEBUG")) Array("--full-stacktrace") else Array[String]()),
       Seq(chisel3.stage.ChiselGeneratorAnnotation(() => new RtAccelTop(p)),
-        _root_.circt.stage.FirtoolOption("-disable-all-randomization"), _root_.circt.stage.FirtoolOption("-strip-debug-info")))
+        _root_.circt.stage.FirtoolOption("-disable-all-randomization"), _root_.circt.stage.FirtoolOption("-strip-debug-info"),
+        // the SystemVerilog subset that Yosys 0.23 reads (no `automatic` locals in always blocks, no packed
+        // arrays) and Verilator lints clean: one output for synthesis, lint and vendor tools
+        _root_.circt.stage.FirtoolOption(EmitVerilog.LoweringOptions)))
     // the host's view of this build: register map, counters and the configuration words it reads back
     Cli.writeText(out.resolve("rtaccel_regs.h"), rtaccel.top.RegHeaders.c(p, Cli.version))
     Cli.writeText(out.resolve("rtaccel_regs.py"), rtaccel.top.RegHeaders.python(p, Cli.version))
