@@ -30,7 +30,7 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog lint simulate soak regress paper-nocache paper-caches bench-caches
+        yosys verilog area lint simulate soak regress paper-nocache paper-caches bench-caches
 
 help:
 	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | paper-nocache | paper-caches   (see README.md)"
@@ -150,6 +150,12 @@ bench-caches: deps
 VCONFIG = $(if $(filter fit,$(CONFIG)),paper2017,$(CONFIG))
 verilog: deps
 	$(JAVA) rtaccel.cli.EmitVerilog --config $(VCONFIG) $(PLATFORM_KNOBS) --out build/$(VCONFIG)
+
+# FPGA resources from a Yosys synthesis (docs/area.md): table on stderr, JSON last line; exit 3 when the
+# configuration does not fit BOARD. Cached per circuit in build/area-cache.
+area: deps yosys
+	@$(JAVA) rtaccel.cli.Area --config $(VCONFIG) $(PLATFORM_KNOBS) $(if $(BOARD),--board $(BOARD)) \
+	  $(if $(FIDELITY),--fidelity $(FIDELITY)) $(if $(UNIT),--unit $(UNIT)) $(if $(OUT),--out $(OUT))
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.
 LINT_WAIVERS = tools/lint.vlt

@@ -12,13 +12,17 @@ object EmitVerilog {
 
   def main(args: Array[String]): Unit = Cli.run(args, Flags.verilog)(main0)
 
-  def main0(a: Args): Unit = {
+  /** The preset CONFIG names with the flags' overrides; `fit` is refused (a fitted config needs a scene). */
+  def preset(a: Args, what: String): rtaccel.config.PlatformParams = {
     val cfg = a.need("config")
-    if (cfg == "fit") throw new rtaccel.io.InputError("make verilog needs a preset (CONFIG=paper2017|paper2017-lrp|small); fitted configs come from a scene via make simulate")
-    val p0 = Cli.params(a)
-    val p = p0.copy(name = cfg)
+    if (cfg == "fit") throw new rtaccel.io.InputError(s"$what needs a preset (CONFIG=paper2017|paper2017-lrp|small); fitted configs come from a scene via make simulate")
+    val p = Cli.params(a).copy(name = cfg)
     rtaccel.cache.hw.CachePath.validate(p)
-    val out = Paths.get(a.get("out", s"build/$cfg"))
+    p
+  }
+
+  /** SystemVerilog of the board top of `p`, one file per module in `out` (old .sv files removed); the files. */
+  def emit(p: rtaccel.config.PlatformParams, out: java.nio.file.Path): Seq[java.nio.file.Path] = {
     Files.createDirectories(out)
     // a previous configuration's modules must not linger next to this one's
     Files.list(out).toArray.map(_.asInstanceOf[java.nio.file.Path]).filter(f => f.toString.endsWith(".sv")).foreach(Files.delete)
@@ -31,10 +35,16 @@ object EmitVerilog {
         // the SystemVerilog subset that Yosys 0.23 reads (no `automatic` locals in always blocks, no packed
         // arrays) and Verilator lints clean: one output for synthesis, lint and vendor tools
         _root_.circt.stage.FirtoolOption(EmitVerilog.LoweringOptions)))
+    Files.list(out).toArray.map(_.asInstanceOf[java.nio.file.Path]).filter(f => f.toString.endsWith(".sv") || f.toString.endsWith(".v")).sortBy(_.toString).toSeq
+  }
+
+  def main0(a: Args): Unit = {
+    val p = preset(a, "make verilog")
+    val out = Paths.get(a.get("out", s"build/${p.name}"))
+    val files = emit(p, out)
     // the host's view of this build: register map, counters and the configuration words it reads back
     Cli.writeText(out.resolve("rtaccel_regs.h"), rtaccel.top.RegHeaders.c(p, Cli.version))
     Cli.writeText(out.resolve("rtaccel_regs.py"), rtaccel.top.RegHeaders.python(p, Cli.version))
-    val files = Files.list(out).toArray.map(_.toString).filter(f => f.endsWith(".sv") || f.endsWith(".v")).sorted
     System.err.println(s"[verilog] ${files.length} files in $out (config ${p.name}: ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}, stack ${p.stackDepth})")
     println(ujson.write(ujson.Obj("config" -> p.name, "out" -> out.toString, "files" -> files.length, "top" -> "RtAccelTop",
       "regs_h" -> out.resolve("rtaccel_regs.h").toString, "regs_py" -> out.resolve("rtaccel_regs.py").toString)))

@@ -41,6 +41,9 @@ object Flags {
   val simulate: Seq[Flag] = inputs ++ platform ++ simOptions :+ f("out", "output folder")
   val sweepTus: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts"))
   val verilog: Seq[Flag] = platform :+ f("out", "output folder")
+  val area: Seq[Flag] = verilog ++ Seq(f("board", "board of boards/catalog.json (BOARD=)"), f("fidelity", "yosys"),
+    f("unit", "one module to synthesize instead of the board top (UNIT=)"), f("cache", "synthesis cache folder"),
+    f("catalog", "board catalog file (default boards/catalog.json)"))
 
   /** Levenshtein distance, for the "did you mean" of a misspelled flag. */
   def distance(a: String, b: String): Int = {

@@ -1,0 +1,61 @@
+package rtaccel.area
+
+import java.nio.file.{Files, Path}
+import scala.sys.process._
+import rtaccel.io.InputError
+
+/** Yosys synthesis of emitted Verilog for a Xilinx family, kept hierarchical so that every unit is counted
+  * on its own; the design's totals are the roll-up of the same hierarchy (Resources per module x instance
+  * counts), so units and totals agree by construction. Flattening would optimise across unit boundaries
+  * (docs/area.md says by how much); the hierarchy is what a per-unit question needs.
+  */
+object Yosys {
+  def version(): String = {
+    val out = try Seq("yosys", "-V").!!.trim catch {
+      case _: Exception => throw new InputError("yosys not found; install it (make area installs it from apt)")
+    }
+    out.split("\\s+").lift(1).getOrElse(out)
+  }
+
+  /** Runs `synth_xilinx -family <family> -top <top>` and writes `stat -json` to statJson; Yosys' log goes to
+    * logFile, and every pass it starts is reported to `progress` (a synthesis of the whole platform takes minutes).
+    */
+  def synthesize(files: Seq[Path], top: String, family: String, logFile: Path, statJson: Path, progress: String => Unit): Unit = {
+    val script = s"read_verilog -sv ${files.map(_.toString).mkString(" ")}; synth_xilinx -family $family -top $top; " +
+      s"tee -q -o $statJson stat -json"
+    var lastPass = ""
+    val code = Process(Seq("yosys", "-q", "-l", logFile.toString, "-p", script)).!(ProcessLogger(
+      l => if (l.nonEmpty) progress(l), l => if (l.nonEmpty) progress(l)))
+    if (code != 0 || !Files.isRegularFile(statJson)) {
+      val tail = if (Files.exists(logFile)) Files.readAllLines(logFile).toArray.takeRight(5).mkString(" | ") else ""
+      throw new InputError(s"yosys failed (status $code) on $top for $family: $tail (log: $logFile)")
+    }
+  }
+
+  /** Cell counts by type of every module in a `stat -json` file (module names without Yosys' escape). */
+  def modules(statJson: Path): Map[String, Map[String, Long]] = {
+    // Yosys 0.23 prints the hierarchy's "<module> <count>" lines into the JSON of `stat -json` when the design
+    // has submodules; they are not JSON and carry nothing the modules section lacks
+    val text = Files.readAllLines(statJson).toArray(Array[String]()).filterNot(_.trim.matches("""[^"{}\[\]:,]+\s+\d+""")).mkString("\n")
+    val j = try ujson.read(text) catch {
+      case e: ujson.ParseException => throw new InputError(s"$statJson: unreadable Yosys statistics (${e.getMessage}); delete it to synthesize again")
+    }
+    j("modules").obj.map { case (m, v) =>
+      clean(m) -> v.obj.get("num_cells_by_type").map(_.obj.map { case (t, n) => clean(t) -> n.num.toLong }.toMap).getOrElse(Map.empty)
+    }.toMap
+  }
+
+  private def clean(name: String): String = name.stripPrefix("\\")
+
+  /** Resources of `top` and of every module it instantiates, rolled up through the hierarchy. */
+  def rollUp(mods: Map[String, Map[String, Long]], unknown: scala.collection.mutable.Set[String]): Map[String, Resources] = {
+    val memo = scala.collection.mutable.Map[String, Resources]()
+    def total(m: String): Resources = memo.getOrElseUpdate(m, {
+      val cells = mods.getOrElse(m, Map.empty)
+      val (subs, prims) = cells.partition { case (t, _) => mods.contains(t) }
+      subs.foldLeft(Resources.of(prims, unknown)) { case (r, (s, n)) => r + total(s) * n }
+    })
+    mods.keys.foreach(total)
+    memo.toMap
+  }
+}
