@@ -23,7 +23,8 @@ RUN_NODE_CACHE ?= 8192
 # A preset is the whole platform it names (caches included); each variable given overrides one field, an
 # absent one keeps the preset's value (README "Configurations").
 PLATFORM_KNOBS = $(if $(M),--m $(M)) $(if $(MPPL),--mppl $(MPPL)) $(if $(TUS),--tus $(TUS)) \
-  $(if $(STACK),--stack-depth $(STACK)) $(CACHE_FLAGS)
+  $(if $(STACK),--stack-depth $(STACK)) $(if $(BOARD),--board $(BOARD)) $(if $(MEM_GBPS),--mem-gbps $(MEM_GBPS)) \
+  $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ)) $(CACHE_FLAGS)
 MODEL_ARGS = --config $(CONFIG) $(PLATFORM_KNOBS)
 TRIS       = $$(tools/tris $(SCENE))
 
@@ -154,7 +155,7 @@ verilog: deps
 # FPGA resources from a Yosys synthesis (docs/area.md): table on stderr, JSON last line; exit 3 when the
 # configuration does not fit BOARD. Cached per circuit in build/area-cache.
 area: deps yosys
-	@$(JAVA) rtaccel.cli.Area --config $(VCONFIG) $(PLATFORM_KNOBS) $(if $(BOARD),--board $(BOARD)) \
+	@$(JAVA) rtaccel.cli.Area --config $(VCONFIG) $(PLATFORM_KNOBS) \
 	  $(if $(FIDELITY),--fidelity $(FIDELITY)) $(if $(UNIT),--unit $(UNIT)) $(if $(OUT),--out $(OUT))
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.

@@ -18,6 +18,7 @@ object Area {
     a.opt("fidelity").filter(_ != "yosys").foreach(f => throw new InputError(
       s"FIDELITY=$f is not available: only FIDELITY=yosys (a real synthesis) is built so far"))
     val board = Boards.byName(a.get("board", "xc5vlx330t"), a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath))
+    // (the board's memory and clock reach the configuration through Cli.params as for every command)
     val p = EmitVerilog.preset(a, "make area")
     val out = Paths.get(a.get("out", s"build/area/${p.name}-${board.name}"))
     val rtl = out.resolve("rtl")

@@ -37,7 +37,13 @@ object Cli {
     */
   def params(a: Args): PlatformParams = {
     val cfg = a.get("config", "fit")
-    val base = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
+    val preset = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
+    // BOARD= brings its memory bandwidth and clock; MEM_GBPS= / CLOCK_MHZ= override either
+    val board = a.opt("board").map(b => rtaccel.area.Boards.byName(b, a.opt("catalog").map(Paths.get(_)).getOrElse(rtaccel.area.Boards.defaultPath)))
+    val gbps = a.opt("mem-gbps").map(_ => a.double("mem-gbps", 0)).orElse(board.map(_.dramGbps))
+    val mhz = a.opt("clock-mhz").map(_ => a.double("clock-mhz", 0)).orElse(board.map(_.clockMhz))
+    val base = preset.copy(memory = gbps.fold(preset.memory)(g => preset.memory.copy(bytesPerSecond = g * 1e9)),
+      clockMhz = mhz.getOrElse(preset.clockMhz))
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),

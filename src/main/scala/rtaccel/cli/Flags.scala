@@ -20,7 +20,10 @@ object Flags {
   val model: Seq[Flag] = Seq(
     f("config", "preset name or fit"), f("m", "MBVH width (2, 4, 8)"), f("mppl", "max primitives per leaf"),
     f("tus", "traversal units"), f("stack-depth", "TU stack entries (STACK=)"),
-    f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"))
+    f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"),
+    f("board", "board of boards/catalog.json (BOARD=): its memory bandwidth and clock unless MEM_GBPS / CLOCK_MHZ are given"),
+    f("mem-gbps", "peak memory bandwidth in GB/s (MEM_GBPS=)"), f("clock-mhz", "platform clock in MHz (CLOCK_MHZ=)"),
+    f("catalog", "board catalog file (default boards/catalog.json)"))
   val cache: Seq[Flag] = Seq(
     f("node-cache", "node cache entries (0 = none)"), f("node-ways", "node cache ways"),
     f("node-policy", "node cache policy"), f("prim-cache", "primitive cache entries (0 = none)"),
@@ -41,9 +44,8 @@ object Flags {
   val simulate: Seq[Flag] = inputs ++ platform ++ simOptions :+ f("out", "output folder")
   val sweepTus: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts"))
   val verilog: Seq[Flag] = platform :+ f("out", "output folder")
-  val area: Seq[Flag] = verilog ++ Seq(f("board", "board of boards/catalog.json (BOARD=)"), f("fidelity", "yosys"),
-    f("unit", "one module to synthesize instead of the board top (UNIT=)"), f("cache", "synthesis cache folder"),
-    f("catalog", "board catalog file (default boards/catalog.json)"))
+  val area: Seq[Flag] = verilog ++ Seq(f("fidelity", "yosys"),
+    f("unit", "one module to synthesize instead of the board top (UNIT=)"), f("cache", "synthesis cache folder"))
 
   /** Levenshtein distance, for the "did you mean" of a misspelled flag. */
   def distance(a: String, b: String): Int = {

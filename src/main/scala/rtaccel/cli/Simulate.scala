@@ -205,7 +205,7 @@ object Simulate {
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond
       val json = ujson.Obj(
-        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz,
+        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
         "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,

@@ -61,4 +61,14 @@ class CacheSimSpec extends AnyFunSuite {
       assert(out.isEmpty, name)
     }
   }
+
+  test("BOARD= brings the board's memory bandwidth and clock; MEM_GBPS= overrides it") {
+    def bound(extra: String*) = { val (c, o, e) = sim(extra: _*); assert(c == 0, e); ujson.read(o.trim.linesIterator.toSeq.last) }
+    val paper = bound(); val kc705 = bound("--board", "xc7k325t"); val own = bound("--board", "xc7k325t", "--mem-gbps", "2.4")
+    def r(j: ujson.Value) = j("bandwidth_bound_rays_per_s").num
+    // same rays and caches: the bound scales with the bandwidth (12.8 GB/s of the catalog vs the paper's 1.2)
+    assert(math.abs(r(kc705) / r(paper) - 12.8 / 1.2) < 1e-9 && math.abs(r(own) / r(paper) - 2.0) < 1e-9)
+    val (code, _, err) = sim("--board", "nosuchboard")
+    assert(code == 2 && err.contains("unknown BOARD 'nosuchboard'"), err)
+  }
 }
