@@ -4,7 +4,9 @@ import rtaccel.model.Analysis
 
 /** make analyze: bandwidth vs MPPL (Fig 4) and accesses by level (Figs 5-6) as CSV in OUT. */
 object Analyze {
-  def main(args: Array[String]): Unit = Cli.run(args, Flags.analyze) { a =>
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.analyze)(main0)
+
+  def main0(a: Args): Unit = {
     val out = a.path("out")
     val (scene, rays, _) = Cli.inputs(a)
     val base = Cli.params(a)
@@ -21,7 +23,8 @@ object Analyze {
     val (_, lbvh, lc, _) = results.find(_._1 == levelMppl).getOrElse {
       val b = Cli.build(scene, base, a); (levelMppl, b.bvh, Analysis.run(b.scene, b.bvh, b.params, rays), null)
     }
-    val prov = s"# scene=$label triangles=${scene.triangles} config=${base.name} M=${base.m} rays=${rays.count} " +
+    val cfgName = Cli.build(scene, base, a).params.name // what CONFIG made of the scene: the preset, or <preset>-fit
+    val prov = s"# scene=$label triangles=${scene.triangles} config=$cfgName M=${base.m} rays=${rays.count} " +
       s"node_access_bytes=${base.nodeAccessBytes} prim_access_bytes=${base.primAccessBytes} rtaccel=${Cli.version}\n"
     val bw = new StringBuilder(prov)
     bw ++= "mppl,rays,nodes,leaves,depth,node_accesses,leaf_accesses,prim_accesses,node_bytes_per_ray,prim_bytes_per_ray,total_bytes_per_ray\n"

@@ -7,7 +7,9 @@ import rtaccel.model.Traversal
 object Bench {
   private def median(xs: Seq[Double]): Double = { val s = xs.sorted; s(s.length / 2) }
 
-  def main(args: Array[String]): Unit = Cli.run(args, Flags.bench) { a =>
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.bench)(main0)
+
+  def main0(a: Args): Unit = {
     val (scene, rays, _) = Cli.inputs(a)
     val p = Cli.params(a)
     val repeat = a.int("repeat", 5)

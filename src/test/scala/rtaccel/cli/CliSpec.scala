@@ -108,4 +108,17 @@ class CliSpec extends AnyFunSuite {
       assert(stdout.isEmpty && !Files.exists(out), s"case $k left output")
     }
   }
+
+  test("analyze and bench honour CONFIG: a preset is checked against the scene, not fitted") {
+    val out = dir.resolve("analyze")
+    val args = Array("--tris", tris.toString, "--rays", raysPath.toString, "--out", out.toString, "--mppls", "1,4")
+    val (c0, _, e0) = captured(args ++ Array("--config", "paper2017"), Flags.analyze)(Analyze.main0)
+    assert(c0 == 0, e0)
+    assert(Files.readString(out.resolve("levels.csv")).linesIterator.next().contains("config=paper2017 "))
+    val (c1, _, _) = captured(args, Flags.analyze)(Analyze.main0)
+    assert(c1 == 0 && Files.readString(out.resolve("levels.csv")).linesIterator.next().contains("config=fit "))
+    val b = Array("--tris", tris.toString, "--rays", raysPath.toString, "--repeat", "1")
+    val (c2, o2, e2) = captured(b ++ Array("--config", "small"), Flags.bench)(Bench.main0)
+    assert(c2 == 0 && ujson.read(o2.trim.linesIterator.toSeq.last)("config").str == "small", e2)
+  }
 }
