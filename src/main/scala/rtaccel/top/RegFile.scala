@@ -118,7 +118,7 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
   when(io.lite.r.fire) { rValid := false.B }
   val rAddr = io.lite.ar.bits.addr
   // reading LO returns the live low word and keeps the high word of that instant for the HI read
-  val snapHi = RegInit(0.U(32.W)); val snapIdx = RegInit(0.U(log2Ceil(counterNames.length + 1).W))
+  val snapHi = RegInit(0.U(32.W)); val snapIdx = RegInit(counterNames.length.U(log2Ceil(counterNames.length + 1).W)) // none yet: HI reads live
   val status = Seq("BUSY" -> (running || io.events.busy), "DONE" -> done, "READ_ERROR" -> stickyReadError,
     "OVERFLOW" -> stickyOverflow, "RUNNING" -> running).map { case (f, v) => v.asUInt << bit(Status, f) }.reduce(_ | _)
   val table: Seq[(Int, UInt)] = constants.map { case (r, v) => r.offset -> v.U(32.W) } ++ Seq(
