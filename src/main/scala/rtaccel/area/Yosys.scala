@@ -23,13 +23,34 @@ object Yosys {
   def synthesize(files: Seq[Path], top: String, family: String, logFile: Path, statJson: Path, progress: String => Unit): Unit = {
     val script = s"read_verilog -sv ${files.map(_.toString).mkString(" ")}; synth_xilinx -family $family -top $top; " +
       s"tee -q -o $statJson stat -json"
-    var lastPass = ""
-    val code = Process(Seq("yosys", "-q", "-l", logFile.toString, "-p", script)).!(ProcessLogger(
-      l => if (l.nonEmpty) progress(l), l => if (l.nonEmpty) progress(l)))
+    // warnings stay in the log; errors are shown as they come
+    val proc = Process(Seq("yosys", "-q", "-l", logFile.toString, "-p", script)).run(ProcessLogger(
+      l => if (l.contains("ERROR")) progress(l), l => if (l.contains("ERROR")) progress(l)))
+    // heartbeat: the pass Yosys is in, from its log, every 30 s (-q keeps the terminal otherwise quiet)
+    val t0 = System.nanoTime(); var beat = t0
+    while (proc.isAlive()) {
+      Thread.sleep(500)
+      if (System.nanoTime() - beat > 30e9) {
+        beat = System.nanoTime()
+        progress(f"${(beat - t0) / 1e9}%.0f s, ${currentPass(logFile)}")
+      }
+    }
+    val code = proc.exitValue()
     if (code != 0 || !Files.isRegularFile(statJson)) {
       val tail = if (Files.exists(logFile)) Files.readAllLines(logFile).toArray.takeRight(5).mkString(" | ") else ""
       throw new InputError(s"yosys failed (status $code) on $top for $family: $tail (log: $logFile)")
     }
+  }
+
+  /** The last numbered pass line of a Yosys log ("25.41. Executing ABC pass ..."), for progress reports. */
+  private def currentPass(log: Path): String = {
+    if (!Files.exists(log)) return "starting"
+    val r = new java.io.RandomAccessFile(log.toFile, "r")
+    try {
+      val n = math.min(r.length, 65536L); r.seek(r.length - n)
+      val buf = new Array[Byte](n.toInt); r.readFully(buf)
+      new String(buf, "latin1").split("\n").reverseIterator.map(_.trim).find(_.matches("""\d+(\.\d+)*\. .*""")).getOrElse("running")
+    } finally r.close()
   }
 
   /** Cell counts by type of every module in a `stat -json` file (module names without Yosys' escape). */

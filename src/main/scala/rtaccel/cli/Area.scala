@@ -35,10 +35,8 @@ object Area {
     if (!cached) {
       Files.createDirectories(cache)
       System.err.println(s"[area] synthesizing $top of '${p.name}' for ${board.family} with Yosys $version (minutes for the whole platform)")
-      var last = System.nanoTime()
       val tmp = cache.resolve("stat.json.tmp")
-      Yosys.synthesize(files, top, board.family, cache.resolve("yosys.log"), tmp, line =>
-        if (System.nanoTime() - last > 10e9) { System.err.println(s"[area] ... ${line.take(100)}"); last = System.nanoTime() })
+      Yosys.synthesize(files, top, board.family, cache.resolve("yosys.log"), tmp, line => System.err.println(s"[area] ${line.take(120)}"))
       Files.move(tmp, stat)
     } else System.err.println(s"[area] cached synthesis $cache")
     val unknown = scala.collection.mutable.Set[String]()
