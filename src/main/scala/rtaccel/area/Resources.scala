@@ -23,7 +23,7 @@ object Resources {
   private val bram18 = "(RAMB18E?[12]?|RAMB18SDP|RAMB18|RAMB16BWER)".r
   private val carry = "(CARRY4|CARRY8|MUXCY)".r
   /** Cell types that cost nothing (buffers, constants) or are accounted elsewhere (wide muxes share LUT slices). */
-  private val free = "(IBUF|OBUF|BUFG|BUFGCTRL|IOBUF|GND|VCC|MUXF[5-9]|XORCY|INV)".r
+  private val free = "(IBUF|OBUF|BUFG|BUFGCTRL|IOBUF|GND|VCC|MUXF[5-9]|XORCY|INV|\\$assert|\\$assume|\\$cover)".r // $assert: simulation checks
 
   /** Resources of one module's own primitive cells; `unknown` collects cell types we do not classify. */
   def of(cells: Map[String, Long], unknown: scala.collection.mutable.Set[String]): Resources =
