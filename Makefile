@@ -34,7 +34,7 @@ SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt projec
         yosys verilog area lint simulate soak regress paper-nocache paper-caches bench-caches
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | paper-nocache | paper-caches   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | regress | paper-nocache | paper-caches | bench-caches   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
