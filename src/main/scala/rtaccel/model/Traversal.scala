@@ -6,7 +6,7 @@ import rtaccel.scene.{Hits, Rays}
 /** Per-ray counters a traversal unit would keep. */
 final class RayStats {
   var nodeFetches = 0L; var leafFetches = 0L; var primTests = 0L; var boxTests = 0L
-  var maxStack = 0; var overflows = 0; var readErrors = 0
+  var maxStack = 0; var overflows = 0; var readErrors = 0; var restarts = 0L
 }
 
 /** Reference traversal of one TU over the packed memory image (paper Section 2), defining the order the
@@ -36,8 +36,82 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
 
   def traceAll(rays: Rays, sink: AccessSink = AccessSink.none, stats: RayStats = new RayStats): Hits = {
     val h = Hits.empty(rays.count)
-    for (i <- 0 until rays.count) trace(i, rays, h, sink, stats)
+    if (p.shortStack > 0) {
+      require(!faults.enabled, "the short stack is modelled without memory faults")
+      for (i <- 0 until rays.count) traceShort(i, rays, h, sink, stats)
+    } else for (i <- 0 until rays.count) trace(i, rays, h, sink, stats)
     h
+  }
+
+  // Short stack with restart (docs/architecture.md, "short stack with restart"): a ring of p.shortStack
+  // entries that overwrites its oldest entry, and a trail of finished children per level. A push never fails;
+  // when the ring runs dry after it dropped entries, traversal restarts at the root and follows the trail.
+  private val ringRef = new Array[Int](math.max(1, p.shortStack)); private val ringT = new Array[Float](math.max(1, p.shortStack))
+  private val ringLvl = new Array[Int](math.max(1, p.shortStack))
+  private var trail = new Array[Int](64)
+
+  def traceShort(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
+    val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
+    val cap = p.shortStack
+    var tmax = r.tmax
+    var bestPrim = -1; var bestU = 0f; var bestV = 0f
+    var n = 0; var head = 0 // entries in the ring; head = slot of the next push
+    var dropped = false
+    java.util.Arrays.fill(trail, 0)
+    def finished(level: Int): Unit = { // the path's node at `level` is done
+      if (level >= 1) trail(level - 1) += 1
+      var l = level; while (l < trail.length) { trail(l) = 0; l += 1 }
+    }
+    var cur = 0; var curLevel = 0; var running = true
+    while (running) {
+      if (curLevel + 1 >= trail.length) trail = java.util.Arrays.copyOf(trail, trail.length * 2)
+      var descended = false
+      if (!codec.isPrim(cur)) {
+        val id = codec.nodeId(cur)
+        sink.node(i, id, curLevel); st.nodeFetches += 1
+        val k = hitChildren(r, tmax, id, st)
+        val skip = trail(curLevel) // children finished on earlier passes (0 on a first visit)
+        if (skip < k) {
+          var q = k - 1
+          while (q > skip) { // far first, as the full stack
+            ringRef(head) = cRef(q); ringT(head) = cT(q); ringLvl(head) = curLevel + 1
+            head = (head + 1) % cap
+            if (n == cap) dropped = true else n += 1
+            q -= 1
+          }
+          if (n > st.maxStack) st.maxStack = n
+          cur = cRef(skip); curLevel += 1; descended = true
+        } // else: every hit child is finished, so is this node (below: pop, restart or end)
+      } else {
+        val first = codec.firstPrim(cur); val cnt = codec.count(cur)
+        sink.leaf(i, first, cnt, curLevel); st.leafFetches += 1
+        var s = first
+        while (s < first + cnt) {
+          slot = s; st.primTests += 1
+          if (RayTriangle.test(r, tmax, coord, tri)) { tmax = tri.t; bestPrim = img.primId(s); bestU = tri.u; bestV = tri.v }
+          s += 1
+        }
+      }
+      if (!descended) {
+        // the subtree at curLevel is done: take the next pending sibling (newest first), or restart
+        var next = false
+        while (!next && n > 0) {
+          head = (head - 1 + cap) % cap; n -= 1
+          val lvl = ringLvl(head)
+          finished(lvl) // popping a sibling at lvl means the path's node at lvl is done
+          curLevel = lvl
+          if (!(ringT(head) > tmax)) { cur = ringRef(head); next = true }
+        }
+        if (!next) {
+          if (dropped) {
+            finished(curLevel); dropped = false
+            if (curLevel == 0) running = false // the root itself is done
+            else { cur = 0; curLevel = 0; st.restarts += 1 }
+          } else running = false // nothing pending and nothing dropped since the last (re)start: done
+        }
+      }
+    }
+    if (bestPrim >= 0) { out.t(i) = tmax; out.prim(i) = bestPrim; out.u(i) = bestU; out.v(i) = bestV }
   }
 
   def trace(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
@@ -51,22 +125,9 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
       if (!codec.isPrim(cur)) {
         val id = codec.nodeId(cur)
         sink.node(i, id, curLevel); st.nodeFetches += 1
-        var k = 0; var j = 0
-        if (faults.nodeBad(id)) { readError = true; j = m } // no child of a poisoned node is trusted
-        while (j < m) {
-          val ref = img.childRef(id, j)
-          if (!codec.isEmpty(ref)) {
-            st.boxTests += 1
-            val tn = RayBox.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
-            if (!tn.isNaN) {
-              // insertion by entry distance, stable: equal distances keep slot order
-              var pos = k
-              while (pos > 0 && cT(pos - 1) > tn) { cRef(pos) = cRef(pos - 1); cT(pos) = cT(pos - 1); pos -= 1 }
-              cRef(pos) = ref; cT(pos) = tn; k += 1
-            }
-          }
-          j += 1
-        }
+        val bad = faults.nodeBad(id) // no child of a poisoned node is trusted
+        if (bad) readError = true
+        val k = if (bad) 0 else hitChildren(r, tmax, id, st)
         var q = k - 1
         while (q >= 1) {
           if (sp == sRef.length) overflowed = true // dropped, as the TU drops it
@@ -100,6 +161,27 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
       out.t(i) = Float.PositiveInfinity; out.prim(i) = if (readError) Hits.ReadError else Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f
     }
     else if (bestPrim >= 0) { out.t(i) = tmax; out.prim(i) = bestPrim; out.u(i) = bestU; out.v(i) = bestV }
+  }
+
+  /** Slab-tests the non-empty children of node `id` and leaves the hit ones in cRef/cT sorted by entry
+    * distance (stable: equal distances keep slot order); returns how many hit.
+    */
+  private def hitChildren(r: PreparedRay, tmax: Float, id: Int, st: RayStats): Int = {
+    var k = 0; var j = 0
+    while (j < m) {
+      val ref = img.childRef(id, j)
+      if (!codec.isEmpty(ref)) {
+        st.boxTests += 1
+        val tn = RayBox.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
+        if (!tn.isNaN) {
+          var pos = k
+          while (pos > 0 && cT(pos - 1) > tn) { cRef(pos) = cRef(pos - 1); cT(pos) = cT(pos - 1); pos -= 1 }
+          cRef(pos) = ref; cT(pos) = tn; k += 1
+        }
+      }
+      j += 1
+    }
+    k
   }
 
   @inline private def box(id: Int, j: Int, q: Int): Float = java.lang.Float.intBitsToFloat(img.childWord(id, j, q))

@@ -128,4 +128,25 @@ class TraversalSpec extends AnyFunSuite {
     val h = traverse(s, PlatformParams(), cut)._1
     for (i <- 0 until rays.count if full.prim(i) >= 0) assert(h.prim(i) == -1 || h.t(i) < full.t(i))
   }
+
+  // The short stack with restart must find exactly the full stack's hits (the same first-visit order of leaves;
+  // revisits cannot replace an equal t), never overflow, and pay only extra node fetches.
+  test("short stack with restart: bit-identical hits to the full stack at 1, 2 and 4 entries, with restarts") {
+    val cases = Seq((TestScenes.soup(51, 3000), TestScenes.rays(52, 400), 4, 1), (TestScenes.soup(53, 2000), TestScenes.rays(54, 300), 8, 1),
+      (TestScenes.soup(55, 2500), TestScenes.rays(56, 300), 2, 2)) ++
+      TestScenes.fixtures.map { case (_, sc, ry) => (sc, ry, 4, 4) }
+    for ((scene, rays, m, mppl) <- cases; ring <- Seq(1, 2, 4)) {
+      val p = PlatformParams(m = m, mppl = mppl)
+      val bvh = Mbvh.build(scene, p); val fp = Fit.fitTo(p, bvh)
+      val full = new RayStats; val short = new RayStats
+      val h0 = new Traversal(MemoryImage.pack(bvh, scene, fp)).traceAll(rays, stats = full)
+      val h1 = new Traversal(MemoryImage.pack(bvh, scene, fp.copy(shortStack = ring))).traceAll(rays, stats = short)
+      def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
+      for (i <- 0 until rays.count)
+        assert(h0.prim(i) == h1.prim(i) && bits(h0.t(i)) == bits(h1.t(i)) && bits(h0.u(i)) == bits(h1.u(i)) && bits(h0.v(i)) == bits(h1.v(i)),
+          s"M=$m ring=$ring ray $i: full ${h0.prim(i)} ${h0.t(i)} vs short ${h1.prim(i)} ${h1.t(i)}")
+      assert(short.overflows == 0 && short.nodeFetches >= full.nodeFetches && short.primTests >= full.primTests)
+      if (ring == 1) assert(short.restarts > 0, s"M=$m: a one-entry ring must restart")
+    }
+  }
 }
