@@ -54,7 +54,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
     val cap = p.shortStack
     var tmax = r.tmax
-    var bestPrim = -1; var bestU = 0f; var bestV = 0f
+    leaf.reset()
     var n = 0; var head = 0 // entries in the ring; head = slot of the next push
     var dropped = false
     java.util.Arrays.fill(trail, 0)
@@ -82,16 +82,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
           if (n > st.maxStack) st.maxStack = n
           cur = cRef(skip); curLevel += 1; descended = true
         } // else: every hit child is finished, so is this node (below: pop, restart or end)
-      } else {
-        val first = codec.firstPrim(cur); val cnt = codec.count(cur)
-        sink.leaf(i, first, cnt, curLevel); st.leafFetches += 1
-        var s = first
-        while (s < first + cnt) {
-          slot = s; st.primTests += 1
-          if (RayTriangle.test(r, tmax, coord, tri)) { tmax = tri.t; bestPrim = img.primId(s); bestU = tri.u; bestV = tri.v }
-          s += 1
-        }
-      }
+      } else tmax = testLeaf(i, r, cur, curLevel, tmax, sink, st)
       if (!descended) {
         // the subtree at curLevel is done: take the next pending sibling (newest first), or restart
         var next = false
@@ -111,13 +102,13 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
         }
       }
     }
-    if (bestPrim >= 0) { out.t(i) = tmax; out.prim(i) = bestPrim; out.u(i) = bestU; out.v(i) = bestV }
+    if (leaf.prim >= 0) { out.t(i) = tmax; out.prim(i) = leaf.prim; out.u(i) = leaf.u; out.v(i) = leaf.v }
   }
 
   def trace(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
     val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
     var tmax = r.tmax
-    var bestPrim = -1; var bestU = 0f; var bestV = 0f
+    leaf.reset()
     var sp = 0
     var overflowed = false; var readError = false
     var cur = 0; var curLevel = 0; var hasCur = true // root node: ref 0 means node id 0
@@ -136,31 +127,43 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
         }
         if (sp > st.maxStack) st.maxStack = sp
         if (k > 0) { cur = cRef(0); curLevel += 1 } else hasCur = false
-      } else {
-        val first = codec.firstPrim(cur); val n = codec.count(cur)
-        sink.leaf(i, first, n, curLevel); st.leafFetches += 1
-        var s = first
-        while (s < first + n) {
-          slot = s; st.primTests += 1
-          if (faults.primBad(s)) readError = true
-          else if (RayTriangle.test(r, tmax, coord, tri)) {
-            tmax = tri.t; bestPrim = img.primId(s); bestU = tri.u; bestV = tri.v
-          }
-          s += 1
-        }
-        hasCur = false
-      }
+      } else { tmax = testLeaf(i, r, cur, curLevel, tmax, sink, st); hasCur = false }
       while (!hasCur && sp > 0) {
         sp -= 1
         if (!(sT(sp) > tmax)) { cur = sRef(sp); curLevel = sLvl(sp); hasCur = true }
       }
     }
     if (overflowed) st.overflows += 1
+    readError ||= leaf.readError
     if (readError) st.readErrors += 1
     if (readError || overflowed) {
       out.t(i) = Float.PositiveInfinity; out.prim(i) = if (readError) Hits.ReadError else Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f
     }
-    else if (bestPrim >= 0) { out.t(i) = tmax; out.prim(i) = bestPrim; out.u(i) = bestU; out.v(i) = bestV }
+    else if (leaf.prim >= 0) { out.t(i) = tmax; out.prim(i) = leaf.prim; out.u(i) = leaf.u; out.v(i) = leaf.v }
+  }
+
+  /** The closest hit found so far in the current ray's leaves, and whether a primitive read failed. */
+  private object leaf {
+    var prim = -1; var u = 0f; var v = 0f; var readError = false
+    def reset(): Unit = { prim = -1; u = 0f; v = 0f; readError = false }
+  }
+
+  /** Tests the primitives of leaf `ref` in slot order against [tmin, tmax); a hit closer than tmax becomes
+    * `leaf`'s closest (an equal t keeps the earlier one); a poisoned primitive is not hit and flags the ray.
+    * Returns the new tmax.
+    */
+  private def testLeaf(i: Int, r: PreparedRay, ref: Int, level: Int, tmax0: Float, sink: AccessSink, st: RayStats): Float = {
+    val first = codec.firstPrim(ref); val n = codec.count(ref)
+    sink.leaf(i, first, n, level); st.leafFetches += 1
+    var tmax = tmax0
+    var s = first
+    while (s < first + n) {
+      slot = s; st.primTests += 1
+      if (faults.primBad(s)) leaf.readError = true
+      else if (RayTriangle.test(r, tmax, coord, tri)) { tmax = tri.t; leaf.prim = img.primId(s); leaf.u = tri.u; leaf.v = tri.v }
+      s += 1
+    }
+    tmax
   }
 
   /** Slab-tests the non-empty children of node `id` and leaves the hit ones in cRef/cT sorted by entry
