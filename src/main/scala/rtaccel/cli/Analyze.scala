@@ -23,7 +23,8 @@ object Analyze {
     val (_, lbvh, lc, _) = results.find(_._1 == levelMppl).getOrElse {
       val b = Cli.build(scene, base, a); (levelMppl, b.bvh, Analysis.run(b.scene, b.bvh, b.params, rays), null)
     }
-    val cfgName = Cli.build(scene, base, a).params.name // what CONFIG made of the scene: the preset, or <preset>-fit
+    // what CONFIG made of the scene (the preset, or fit), as the builds above named it: no extra BVH build
+    val cfgName = if (Cli.fitRequested(a)) rtaccel.config.Fit.fitTo(base, lbvh).name else base.name
     val prov = s"# scene=$label triangles=${scene.triangles} config=$cfgName M=${base.m} rays=${rays.count} " +
       s"node_access_bytes=${base.nodeAccessBytes} prim_access_bytes=${base.primAccessBytes} rtaccel=${Cli.version}\n"
     val bw = new StringBuilder(prov)
