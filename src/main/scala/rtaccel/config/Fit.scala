@@ -31,7 +31,7 @@ object Fit {
     val n = needs(bvh)
     p.copy(name = if (p.name.endsWith("fit")) p.name else s"${p.name}-fit",
       refs = RefFormat(n.nodeIdBits, n.primIndexBits, n.countBits, if (p.refs.levelBits == 0 && !levelAware(p)) 0 else n.levelBits),
-      stackDepth = n.stackDepth)
+      stackDepth = n.stackDepth, treeLevels = n.maxLevel + 1)
   }
 
   /** Level-aware node caches read each node's level from its reference: the config must have the field. */
@@ -50,7 +50,14 @@ object Fit {
     if (n.primIndexBits > p.refs.primIndexBits)
       refuse("primitive index field", s"${n.primIndexBits} bits (${n.prims} primitives)", s"${p.refs.primIndexBits} bits", "use CONFIG=fit or widen primIndexBits")
     checkLevelField(p)
-    if (n.stackDepth > p.stackDepth)
+    if (p.shortStack == 0 && n.stackDepth > p.stackDepth) // a short stack never overflows
       refuse("traversal stack", s"${n.stackDepth} entries (tree of ${n.maxLevel + 1} levels)", s"${p.stackDepth} entries", "raise stackDepth, raise MPPL or use CONFIG=fit")
+    checkTrail(p, n, sceneName)
   }
+
+  /** The short stack's trail holds one counter per node level; a deeper tree cannot be walked. */
+  def checkTrail(p: PlatformParams, n: SceneNeeds, sceneName: String): Unit =
+    if (p.shortStack > 0 && n.maxLevel + 1 > p.treeLevels)
+      throw new InputError(s"scene '$sceneName' does not fit config '${p.name}': the short stack's trail needs ${n.maxLevel + 1} levels " +
+        s"but the config has ${p.treeLevels}; raise treeLevels, raise MPPL or use CONFIG=fit")
 }

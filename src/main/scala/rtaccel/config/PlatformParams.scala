@@ -81,9 +81,11 @@ final case class PlatformParams(
   axiDataBits: Int = 256,
   divStages: Int = 6,
   hw: HwLimits = HwLimits(),
-  shortStack: Int = 0 // > 0: a ring of that many entries with restart instead of the full stack (model only so far)
+  shortStack: Int = 0, // > 0: a ring of that many entries with restart instead of the full stack
+  treeLevels: Int = 64 // node levels a TU can walk: the short stack keeps one trail counter per level
 ) {
   require(shortStack >= 0 && shortStack <= 64, s"SHORT_STACK must be 0 (full stack) or 1..64 entries (got $shortStack)")
+  require(treeLevels >= 1 && treeLevels <= 256, s"tree levels must be 1..256 (got $treeLevels)")
   require(tus >= 1 && tus <= 1024, s"TUS must be in 1..1024 (got $tus)")
   require(Set(2, 4, 8)(m), s"M (MBVH width) must be 2, 4 or 8 (got $m)")
   require(mppl >= 1, s"MPPL must be at least 1 (got $mppl)")

@@ -36,12 +36,13 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
 
   def traceAll(rays: Rays, sink: AccessSink = AccessSink.none, stats: RayStats = new RayStats): Hits = {
     val h = Hits.empty(rays.count)
-    if (p.shortStack > 0) {
-      require(!faults.enabled, "the short stack is modelled without memory faults")
-      for (i <- 0 until rays.count) traceShort(i, rays, h, sink, stats)
-    } else for (i <- 0 until rays.count) trace(i, rays, h, sink, stats)
+    for (i <- 0 until rays.count) trace(i, rays, h, sink, stats)
     h
   }
+
+  /** Traces ray i with the configured stack: the full stack, or the short stack with restart. */
+  def trace(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit =
+    if (p.shortStack > 0) traceShort(i, rays, out, sink, st) else traceFull(i, rays, out, sink, st)
 
   // Short stack with restart (docs/architecture.md, "short stack with restart"): a ring of p.shortStack
   // entries that overwrites its oldest entry, and a trail of finished children per level. A push never fails;
@@ -50,7 +51,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private val ringLvl = new Array[Int](math.max(1, p.shortStack))
   private var trail = new Array[Int](64)
 
-  def traceShort(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
+  private def traceShort(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
     val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
     val cap = p.shortStack
     var tmax = r.tmax
@@ -62,14 +63,16 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
       if (level >= 1) trail(level - 1) += 1
       var l = level; while (l < trail.length) { trail(l) = 0; l += 1 }
     }
-    var cur = 0; var curLevel = 0; var running = true
+    var cur = 0; var curLevel = 0; var running = true; var readError = false
     while (running) {
       if (curLevel + 1 >= trail.length) trail = java.util.Arrays.copyOf(trail, trail.length * 2)
       var descended = false
       if (!codec.isPrim(cur)) {
         val id = codec.nodeId(cur)
         sink.node(i, id, curLevel); st.nodeFetches += 1
-        val k = hitChildren(r, tmax, id, st)
+        val bad = faults.nodeBad(id) // as the full stack: no child of a poisoned node is trusted
+        if (bad) readError = true
+        val k = if (bad) 0 else hitChildren(r, tmax, id, st)
         val skip = trail(curLevel) // children finished on earlier passes (0 on a first visit)
         if (skip < k) {
           var q = k - 1
@@ -102,10 +105,10 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
         }
       }
     }
-    if (leaf.prim >= 0) { out.t(i) = tmax; out.prim(i) = leaf.prim; out.u(i) = leaf.u; out.v(i) = leaf.v }
+    record(i, out, st, tmax, overflowed = false, readError || leaf.readError)
   }
 
-  def trace(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
+  private def traceFull(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
     val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
     var tmax = r.tmax
     leaf.reset()
@@ -133,8 +136,12 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
         if (!(sT(sp) > tmax)) { cur = sRef(sp); curLevel = sLvl(sp); hasCur = true }
       }
     }
+    record(i, out, st, tmax, overflowed, readError || leaf.readError)
+  }
+
+  /** Writes ray i's hit record: a fault record (a read error wins over an overflow), the closest hit, or a miss. */
+  private def record(i: Int, out: Hits, st: RayStats, tmax: Float, overflowed: Boolean, readError: Boolean): Unit = {
     if (overflowed) st.overflows += 1
-    readError ||= leaf.readError
     if (readError) st.readErrors += 1
     if (readError || overflowed) {
       out.t(i) = Float.PositiveInfinity; out.prim(i) = if (readError) Hits.ReadError else Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f

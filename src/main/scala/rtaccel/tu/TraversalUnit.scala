@@ -32,6 +32,9 @@ class TuResult extends Bundle {
   * A push onto a full stack is dropped, the ray is flagged `overflow` and traversal carries on (the same
   * accesses as the model); its result is the overflow record (prim -3, t = +inf, u = v = 0), never a
   * plausible wrong hit.
+  * With `p.shortStack` > 0 the stack is the short stack with restart (ShortStack, model.Traversal.traceShort):
+  * a node skips the hit children its trail says are finished, pushes never fail, and when the ring runs dry
+  * after a drop the TU restarts at the root; same fetches in the same order as the model.
   */
 class TraversalUnit(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
@@ -56,17 +59,21 @@ class TraversalUnit(p: PlatformParams) extends Module {
   val overflow = Reg(Bool())
   val readError = Reg(Bool())
   class Entry extends Bundle { val cref = UInt(32.W); val t = UInt(32.W) }
-  val stack = Mem(p.stackDepth, new Entry)
+  private val short = p.shortStack > 0
+  val stack = if (short) None else Some(Mem(p.stackDepth, new Entry))
   val sp = RegInit(0.U(log2Ceil(p.stackDepth + 1).W))
+  val ss = if (short) Some(new ShortStack(p)) else None
   val sorted = Reg(Vec(p.m, new Entry))
   val pushIdx = Reg(UInt(log2Ceil(p.m).W))
+  // the push state ends after sorted(lastPush): sorted(1) with the full stack, sorted(skip + 1) with the short one
+  val lastPush = if (short) Reg(UInt(log2Ceil(p.m).W)) else WireDefault(1.U(log2Ceil(p.m).W))
 
   io.ray.ready := state === S.idle
   io.busy := state =/= S.idle
   when(io.ray.fire) {
     r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B; readError := false.B
     best.id := io.ray.bits.id; best.t := inf; best.prim := "hffffffff".U; best.u := 0.U; best.v := 0.U
-    sp := 0.U
+    sp := 0.U; ss.foreach(_.start())
     state := S.issue
   }
 
@@ -90,18 +97,25 @@ class TraversalUnit(p: PlatformParams) extends Module {
       sorted(ranks(j)).cref := b.cref(j); sorted(ranks(j)).t := b.tnear(j)
     }
     val k = PopCount(b.hit)
-    when(k === 0.U) { state := S.pop }
+    // the first unfinished hit child: rank 0 with the full stack, rank trail(level) with the short one
+    val skip = ss.fold(0.U)(_.skip)
+    when(k <= skip) { state := S.pop } // no hit child left: this node is done
       .otherwise {
-        cur := Mux1H(Seq.tabulate(p.m)(j => (b.hit(j) && ranks(j) === 0.U) -> b.cref(j))) // exactly one hit child has rank 0
-        pushIdx := k - 1.U
-        state := Mux(k === 1.U, S.issue, S.push)
+        cur := Mux1H(Seq.tabulate(p.m)(j => (b.hit(j) && ranks(j) === skip) -> b.cref(j))) // exactly one hit child has that rank
+        ss.foreach(s => s.level := s.level + 1.U)
+        pushIdx := k - 1.U; if (short) lastPush := skip + 1.U
+        state := Mux(k === skip + 1.U, S.issue, S.push)
       }
   }
-  when(state === S.push) { // far first: sorted(k-1) down to sorted(1)
-    when(sp === p.stackDepth.U) { overflow := true.B }
-      .otherwise { stack(sp) := sorted(pushIdx); sp := sp + 1.U }
+  when(state === S.push) { // far first: sorted(k-1) down to sorted(skip+1)
+    ss match {
+      case Some(s) => s.push(sorted(pushIdx).cref, sorted(pushIdx).t)
+      case None =>
+        when(sp === p.stackDepth.U) { overflow := true.B }
+          .otherwise { stack.get(sp) := sorted(pushIdx); sp := sp + 1.U }
+    }
     pushIdx := pushIdx - 1.U
-    when(pushIdx === 1.U) { state := S.issue }
+    when(pushIdx === lastPush) { state := S.issue }
   }
 
   // Leaf: results arrive in slot order; an earlier equal t is kept.
@@ -115,12 +129,21 @@ class TraversalUnit(p: PlatformParams) extends Module {
   }
 
   when(state === S.pop) {
-    when(sp === 0.U) { state := S.done }
-      .otherwise {
-        val top = stack(sp - 1.U)
-        sp := sp - 1.U
-        when(!Fp.gt(f, top.t, tmax)) { cur := top.cref; state := S.issue }
-      }
+    ss match {
+      case Some(s) =>
+        when(!s.empty) {
+          val top = s.pop()
+          when(!Fp.gt(f, top.t, tmax)) { cur := top.cref; state := S.issue }
+        }.elsewhen(s.anyDropped && s.level =/= 0.U) { s.restart(); cur := 0.U; state := S.issue } // from the root again
+          .otherwise { state := S.done } // nothing pending and nothing dropped, or the root itself is finished
+      case None =>
+        when(sp === 0.U) { state := S.done }
+          .otherwise {
+            val top = stack.get(sp - 1.U)
+            sp := sp - 1.U
+            when(!Fp.gt(f, top.t, tmax)) { cur := top.cref; state := S.issue }
+          }
+    }
   }
 
   io.result.valid := state === S.done

@@ -33,10 +33,12 @@ class PlatformSpec extends AnyFunSuite {
   }
 
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
-                     node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1) = {
+                     node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
+                     short: Int = 0) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
-    val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim)
+    val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
+      shortStack = short)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed))
@@ -57,7 +59,7 @@ class PlatformSpec extends AnyFunSuite {
         assert(j(k)("hits").num > 0 && j(k)("misses").num > 0, s"$k: a test cache must both hit and miss")
       }
     } else assert(j("node_cache")("entries").num == 0 && j("prim_cache")("entries").num == 0, "an uncached run must build no cache")
-    j
+    o
   }
 
   for ((tus, m, mppls) <- grid; mppl <- mppls)
@@ -80,7 +82,7 @@ class PlatformSpec extends AnyFunSuite {
     }
 
   test("a stack too small for the scene: the RTL flags exactly the model's overflowed rays, bit for bit") {
-    val j = runOne(2, 8, 1, rays, scene, stack = 2)
+    val j = runOne(2, 8, 1, rays, scene, stack = 2).json
     info(s"${j("overflowed").num.toInt} of ${rays.count} rays overflowed a 2-entry stack")
     assert(j("model_overflowed").num > 0 && j("model_overflowed").num < rays.count, "the test stack must overflow some rays, not all")
   }
@@ -93,15 +95,29 @@ class PlatformSpec extends AnyFunSuite {
       // a seed whose poison spares the root node (a poisoned root fails every ray, which tests less)
       val rate = 0.003
       val seed = (1 to 1000).find(s => !MemFaults(MemFaults.threshold(rate), s, 32, 128, 0, 64).nodeBad(0)).get
-      val j = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = rate, seed = seed)
+      val j = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = rate, seed = seed).json
       info(f"${j("read_errors").num}%.0f of ${rays.count} rays read a poisoned beat (${j("mem_error_beats").num}%.0f error beats)")
       assert(j("model_read_errors").num > 0 && j("model_read_errors").num < rays.count, "the rate must hit some rays, not all")
       assert(j("mem_error_beats").num > 0 && j("mem_error_beats").num == j("counters")("mem_read_errors").num)
     }
 
+  // Short stack with restart in the TUs: the RTL's fetches (counted and replayed through the caches) and hits
+  // equal model.traceShort's, and its hits the full stack's.
+  for ((tus, ring, node, prim, jitter) <- Seq((1, 2, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 0),
+      (8, 1, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(), 29)))
+    test(s"short stack of $ring with restart at $tus TU(s) with caches: bit-exact, counts equal the model, hits equal the full stack's") {
+      val sh = runOne(tus, 4, 4, rays, scene, jitter, node = node, prim = prim, short = ring); val j = sh.json
+      val fo = runOne(tus, 4, 4, rays, scene, jitter, node = node, prim = prim); val full = fo.json
+      def bits(h: rtaccel.scene.Hits, i: Int) = Seq(h.t(i), h.u(i), h.v(i)).map(java.lang.Float.floatToRawIntBits) :+ h.prim(i)
+      for (i <- 0 until rays.count) assert(bits(sh.hits, i) == bits(fo.hits, i), s"ray $i: the short stack's hit differs from the full stack's")
+      info(f"ring $ring: ${j("model_restarts").num}%.0f restarts, ${j("node_requests").num}%.0f node fetches vs ${full("node_requests").num}%.0f with the full stack")
+      assert(j("model_restarts").num > 0 && j("node_requests").num > full("node_requests").num, "the test ring must restart")
+      assert(j("short_stack").num == ring && j("overflowed").num == 0)
+    }
+
   test("random memory latency and host backpressure change no result") {
-    val quiet = runOne(4, 4, 4, rays, scene)
-    val noisy = runOne(4, 4, 4, rays, scene, jitter = 37, stall = 40)
+    val quiet = runOne(4, 4, 4, rays, scene).json
+    val noisy = runOne(4, 4, 4, rays, scene, jitter = 37, stall = 40).json
     assert(noisy("cycles").num > quiet("cycles").num, "stalls must cost cycles")
     assert(noisy("counters")("stall_host_backpressure").num > 0)
   }

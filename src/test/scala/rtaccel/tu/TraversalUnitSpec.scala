@@ -69,7 +69,7 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   private def sim(p: PlatformParams) = {
     val r = p.refs
     Seq(VerilatorBackendAnnotation, VerilatorCFlags(Seq("-O1")), CachingAnnotation, TargetDirAnnotation(
-      s"test_run_dir/TraversalUnitSpec/m${p.m}-stack${p.stackDepth}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-tus${p.tus}"))
+      s"test_run_dir/TraversalUnitSpec/m${p.m}-stack${p.stackDepth}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-tus${p.tus}-short${p.shortStack}.${p.treeLevels}"))
   }
 
   /** Runs the rays through one TU (its index port = `index`). nodeBad / primBad: the node ids and primitive
@@ -288,6 +288,25 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     assert(over.forall(r => r.prim == Hits.Overflow && r.prim == -3 && r.t == fbits(Inf) && r.u == 0 && r.v == 0 && !r.readError))
   }
 
+  // Short stack with restart: the same fetches (restart revisits included) and records as model.traceShort,
+  // which TraversalSpec holds bit-identical to the full stack.
+  for ((m, mppl, ring, seed) <- Seq((4, 4, 1, 7L), (4, 2, 2, 8L), (8, 1, 3, 9L), (2, 1, 4, 10L)))
+    test(s"short stack with restart, M=$m MPPL=$mppl ring $ring: fetches and records equal the model, restarts included") {
+      val n = 250
+      val img0 = soupImage(seed, 300, PlatformParams(tus = 4, m = m, mppl = mppl), fit = true)
+      val img = img0.copy(p = img0.p.copy(shortStack = ring))
+      val rays = soupRays(seed + 10, n); val id = ids(n, seed)
+      val want = model(img, MemFaults.none, rays, id)
+      val got = rtl(img.p, img, rays, id, seed, index = 2)
+      compare(s"ring $ring", seed, got, want, rays)
+      val full = model(img0, MemFaults.none, rays, id)
+      assert(want.records == full.records, "the short stack's records must equal the full stack's")
+      val extra = want.accesses.map(_.length).sum - full.accesses.map(_.length).sum
+      info(s"$n rays, ${full.accesses.map(_.length).sum} fetches with the full stack, $extra more after restarts, ${got.cycles} cycles")
+      assert(extra > 0, s"a ring of $ring entries on this soup must restart")
+      assert(want.records.forall(!_.overflow))
+    }
+
   test("memory read errors (poisoned nodes and primitives, MemFaults): records and fetches equal the model's with the same faults") {
     val seed = 6L; val n = 300
     val img0 = soupImage(seed, 200, PlatformParams(tus = 4, m = 4, mppl = 4))
@@ -295,11 +314,12 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     // a fault seed that spares the root (a poisoned root fails every ray) and poisons something
     val faults = (1 to 1000).iterator.map(s => MemFaults(MemFaults.threshold(0.003), s, 32, img0.p.nodeStrideBytes, primBase, 64))
       .find(f => !f.nodeBad(0) && (0 until img0.numNodes).exists(f.nodeBad) && (0 until img0.numPrims).exists(f.primBad)).get
-    for ((stack, what) <- Seq((img0.p.stackDepth, "32-entry stack"), (2, "stack 2: overflow and read error together"))) {
-      val img = img0.copy(p = img0.p.copy(stackDepth = stack))
+    for ((stack, ring, what) <- Seq((img0.p.stackDepth, 0, "32-entry stack"), (2, 0, "stack 2: overflow and read error together"),
+        (img0.p.stackDepth, 2, "short stack of 2 with restart"))) {
+      val img = img0.copy(p = img0.p.copy(stackDepth = stack, shortStack = ring))
       val rays = soupRays(seed + 10, n); val id = ids(n, seed)
       val want = model(img, faults, rays, id)
-      val got = rtl(img.p, img, rays, id, seed + stack, index = 1, faults.nodeBad, faults.primBad)
+      val got = rtl(img.p, img, rays, id, seed + stack + ring, index = 1, faults.nodeBad, faults.primBad)
       compare(what, seed, got, want, rays)
       val bad = want.records.filter(_.readError)
       info(s"$what: ${bad.length} of $n rays read a poisoned node or primitive (fault seed ${faults.seed})")

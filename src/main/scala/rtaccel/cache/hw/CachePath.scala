@@ -192,7 +192,6 @@ object CachePath {
   /** Refuses cache configurations the RTL cannot build, with what to change (InputError: one `error:` line). */
   def validate(p: rtaccel.config.PlatformParams): Unit = {
     def fail(msg: String) = throw new rtaccel.io.InputError(msg)
-    if (p.shortStack > 0) fail(s"SHORT_STACK=${p.shortStack} is modelled (make trace, cachesim, analyze) but not built in the TU yet; drop it for simulate, verilog and area")
     rtaccel.config.Fit.checkLevelField(p)
     for ((what, c) <- Seq("NODE" -> p.nodeCache, "PRIM" -> p.primCache) if c.entries > 0) {
       val pol = try Policies.of(c.policy, c.ways) catch { case e: IllegalArgumentException => fail(s"${what}_POLICY: ${e.getMessage.stripPrefix("requirement failed: ")}") }
