@@ -23,7 +23,7 @@ RUN_NODE_CACHE ?= 8192
 # A preset is the whole platform it names (caches included); each variable given overrides one field, an
 # absent one keeps the preset's value (README "Configurations").
 PLATFORM_KNOBS = $(if $(M),--m $(M)) $(if $(MPPL),--mppl $(MPPL)) $(if $(TUS),--tus $(TUS)) \
-  $(if $(STACK),--stack-depth $(STACK)) $(if $(SHORT_STACK),--short-stack $(SHORT_STACK)) $(if $(BOARD),--board $(BOARD)) $(if $(MEM_GBPS),--mem-gbps $(MEM_GBPS)) \
+  $(if $(STACK),--stack-depth $(STACK)) $(if $(SHORT_STACK),--short-stack $(SHORT_STACK)) $(if $(BOX_FORMAT),--box-format $(BOX_FORMAT)) $(if $(BOARD),--board $(BOARD)) $(if $(MEM_GBPS),--mem-gbps $(MEM_GBPS)) \
   $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ)) $(CACHE_FLAGS)
 MODEL_ARGS = --config $(CONFIG) $(PLATFORM_KNOBS)
 TRIS       = $$(tools/tris $(SCENE))

@@ -48,6 +48,7 @@ object Cli {
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),
+      boxFormat = a.opt("box-format").map(rtaccel.fp.FpFormat.parse).getOrElse(base.boxFormat),
       nodeCache = cacheArg(a, "node", base.nodeCache), primCache = cacheArg(a, "prim", base.primCache))
   }
 

@@ -21,6 +21,7 @@ object Flags {
     f("config", "preset name or fit"), f("m", "MBVH width (2, 4, 8)"), f("mppl", "max primitives per leaf"),
     f("tus", "traversal units"), f("stack-depth", "TU stack entries (STACK=)"),
     f("short-stack", "ring of that many entries with restart instead of the full stack (SHORT_STACK=)"),
+    f("box-format", "arithmetic of the ray-box test: fp32 | fp24 | bf16 | fp16 | e<E>m<M> (BOX_FORMAT=; narrower ones round outward)"),
     f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"),
     f("board", "board of boards/catalog.json (BOARD=): its memory bandwidth and clock unless MEM_GBPS / CLOCK_MHZ are given"),
     f("mem-gbps", "peak memory bandwidth in GB/s (MEM_GBPS=)"), f("clock-mhz", "platform clock in MHz (CLOCK_MHZ=)"),

@@ -213,7 +213,7 @@ object Simulate {
         "mem_utilisation" -> counters("mem_busy_beats") * axi.beatBytes / (math.max(1, cycles) * peakBytesPerCycle),
         "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall,
         "scene" -> label, "config" -> p.name, "tus" -> p.tus, "m" -> p.m, "mppl" -> p.mppl,
-        "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "model_restarts" -> stats.restarts.toDouble, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
+        "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "model_restarts" -> stats.restarts.toDouble, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
         "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> rtlReadError.count(identity),
         "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,

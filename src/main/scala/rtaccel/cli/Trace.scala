@@ -30,7 +30,7 @@ object Trace {
       "node_bytes_per_ray" -> st.nodeFetches * p.nodeAccessBytes / n,
       "prim_bytes_per_ray" -> st.primTests * p.primAccessBytes / n,
       "max_stack" -> st.maxStack, "stack_overflow_rays" -> st.overflows, "overflowed" -> st.overflows,
-      "short_stack" -> p.shortStack, "restarts" -> st.restarts.toDouble,
+      "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "restarts" -> st.restarts.toDouble,
       "build_s" -> b.buildSeconds, "trace_s" -> secs, "rays_per_s" -> rays.count / math.max(secs, 1e-9))
     // Outputs are complete in memory before the first file is written.
     hits.save(out.resolve("hits.npy"))

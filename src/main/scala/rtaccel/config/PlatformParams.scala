@@ -82,8 +82,11 @@ final case class PlatformParams(
   divStages: Int = 6,
   hw: HwLimits = HwLimits(),
   shortStack: Int = 0, // > 0: a ring of that many entries with restart instead of the full stack
-  treeLevels: Int = 64 // node levels a TU can walk: the short stack keeps one trail counter per level
+  treeLevels: Int = 64, // node levels a TU can walk: the short stack keeps one trail counter per level
+  boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32 // arithmetic of the slab test; narrower ones round outward
 ) {
+  require(rtaccel.fp.FpFormat.fp32.holds(boxFormat),
+    s"BOX_FORMAT=${boxFormat.name} is wider than fp32 in exponent or fraction; the box test takes fp32 inputs, so use a format within e8m23")
   require(shortStack >= 0 && shortStack <= 64, s"SHORT_STACK must be 0 (full stack) or 1..64 entries (got $shortStack)")
   require(treeLevels >= 1 && treeLevels <= 256, s"tree levels must be 1..256 (got $treeLevels)")
   require(tus >= 1 && tus <= 1024, s"TUS must be in 1..1024 (got $tus)")

@@ -5,7 +5,8 @@ import chisel3.util._
 
 /** Combinational IEEE 754 binary floating-point operators, generic in [[FpFormat]].
   *
-  * All arithmetic rounds to nearest, ties to even; subnormal inputs and outputs are kept (no flush to zero);
+  * All arithmetic rounds to nearest, ties to even, except the directed variants (subDirected, mulDirected,
+  * convert: toward +inf or -inf, for the conservative reduced-precision box test); subnormal inputs and outputs are kept (no flush to zero);
   * overflow gives ±inf; every NaN produced by add/sub/mul/div is `f.canonicalNaN`. The min/max selectors follow
   * the comparator-select reference in `rtaccel.model.Fp32` exactly (on equal operands the second is returned).
   *
@@ -79,7 +80,7 @@ object Fp {
     * right shifter), `maxLeftShift` bounds sig's leading zeros that need normalising (narrower shifter/LZC).
     */
   private[fp] def roundPack(f: FpFormat, sign: Bool, exp: SInt, sigIn: UInt, stickyIn: Bool,
-                            canUnderflow: Boolean = true, maxLeftShift: Int = Int.MaxValue): UInt = {
+                            canUnderflow: Boolean = true, maxLeftShift: Int = Int.MaxValue, toPos: Option[Bool] = None): UInt = {
     val m = f.manBits
     val e = f.expBits
     val n0 = sigIn.getWidth
@@ -110,7 +111,9 @@ object Fp {
     val guard = s(n - 2 - m)
     val low = if (n - 3 - m >= 0) s(n - 3 - m, 0).orR else false.B
     val sticky = stickyIn || (if (canUnderflow) !leftCase && lostR else false.B) || low
-    val up = guard && (sticky || kept(0))
+    // nearest even, or (directed) away from zero exactly when the direction points away from zero
+    val awayDir = toPos.map(_ =/= sign)
+    val up = awayDir.fold(guard && (sticky || kept(0)))(a => a && (guard || sticky))
     val rounded = kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
 
     // Packing trick: ((eOut-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
@@ -120,13 +123,18 @@ object Fp {
     val eLow = eM1.asUInt(e - 1, 0)
     val sum = Cat(eLow, 0.U(m.W)) +& rounded
     val ovf = bigExp || sum >= (BigInt(f.maxExp) << m).U
-    Mux(ovf, packInf(f, sign), Cat(sign, sum(e + m - 1, 0)))
+    // an overflow rounded toward zero stays at the largest finite value
+    val ovfValue = awayDir.fold(packInf(f, sign))(a => Mux(a, packInf(f, sign), Cat(sign, (f.maxExp - 1).U(e.W), Fill(m, 1.U(1.W)))))
+    Mux(ovf, ovfValue, Cat(sign, sum(e + m - 1, 0)))
   }
 
   // ---------------------------------------------------------------------------------------------------------
   // add / sub
 
-  private def addCore(f: FpFormat, a: UInt, b: UInt, negB: Boolean): UInt = {
+  /** a ± b of format `f`, rounded to `fo` (nearest, or directed by `toPos`). The sum is formed at f's width
+    * with guard/round/sticky bits, so rounding it to a narrower fo is still the correct rounding of the exact sum.
+    */
+  private def addCore(f: FpFormat, a: UInt, b: UInt, negB: Boolean, fo: FpFormat, toPos: Option[Bool]): UInt = {
     val m = f.manBits
     val ua = new Unpacked(f, a)
     val ub = new Unpacked(f, b)
@@ -154,33 +162,49 @@ object Fp {
 
     val effSub = sA =/= sB
     val res = Mux(effSub, xExt - yExt, xExt + yExt) // m+5 bits, top bit = carry position
-    val ew = expW(f)
-    val exp = (xExp.zext + 1.S).pad(ew)
-    val rounded = roundPack(f, xSign, exp, res, false.B, canUnderflow = false) // exp = xExp + 1 >= 2
+    val ew = expW(f) max expW(fo)
+    val exp = xExp.zext.pad(ew) + (1 - f.bias + fo.bias).S
+    // exp = xExp + 1 >= 2 in f; a narrower exponent range can underflow
+    val rounded = roundPack(fo, xSign, exp, res, false.B, canUnderflow = fo.bias < f.bias, toPos = toPos)
 
     val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isInf && effSub)
     val isInf = ua.isInf || ub.isInf
     val infSign = Mux(ua.isInf, sA, sB)
-    val zeroSign = sA && sB // exact zero: -0 only for (-0) + (-0)
-    Mux(isNaN, nan(f),
-      Mux(isInf, packInf(f, infSign),
-        Mux(res === 0.U, packZero(f, zeroSign), rounded)))
+    // exact zero: -0 only for (-0) + (-0), or (IEEE) a cancellation rounded toward -inf
+    val zeroSign = toPos.fold(sA && sB)(tp => Mux(sA === sB, sA, !tp))
+    Mux(isNaN, nan(fo),
+      Mux(isInf, packInf(fo, infSign),
+        Mux(res === 0.U, packZero(fo, zeroSign), rounded)))
   }
 
-  def add(f: FpFormat, a: UInt, b: UInt): UInt = addCore(f, a, b, negB = false)
-  def sub(f: FpFormat, a: UInt, b: UInt): UInt = addCore(f, a, b, negB = true)
+  def add(f: FpFormat, a: UInt, b: UInt): UInt = addCore(f, a, b, negB = false, f, None)
+  def sub(f: FpFormat, a: UInt, b: UInt): UInt = addCore(f, a, b, negB = true, f, None)
+  /** a - b of format f, rounded toward +inf (toPos) or -inf into format fo. */
+  def subDirected(f: FpFormat, fo: FpFormat, a: UInt, b: UInt, toPos: Bool): UInt = addCore(f, a, b, negB = true, fo, Some(toPos))
+
+  /** x of format f in format fo: exact when fo holds it, else rounded toward +inf (toPos) or -inf. */
+  def convert(f: FpFormat, fo: FpFormat, x: UInt, toPos: Bool): UInt = {
+    val u = new Unpacked(f, x)
+    val ew = expW(f) max expW(fo)
+    val rounded = roundPack(fo, u.sign, u.exp.zext.pad(ew) + (fo.bias - f.bias).S, u.sig, false.B, toPos = Some(toPos))
+    Mux(u.isNaN, nan(fo), Mux(u.isInf, packInf(fo, u.sign), Mux(u.isZero, packZero(fo, u.sign), rounded)))
+  }
 
   // ---------------------------------------------------------------------------------------------------------
   // mul
 
-  def mul(f: FpFormat, a: UInt, b: UInt): UInt = {
+  def mul(f: FpFormat, a: UInt, b: UInt): UInt = mulCore(f, a, b, None)
+  /** a * b rounded toward +inf (toPos) or -inf. */
+  def mulDirected(f: FpFormat, a: UInt, b: UInt, toPos: Bool): UInt = mulCore(f, a, b, Some(toPos))
+
+  private def mulCore(f: FpFormat, a: UInt, b: UInt, toPos: Option[Bool]): UInt = {
     val ua = new Unpacked(f, a)
     val ub = new Unpacked(f, b)
     val sign = ua.sign ^ ub.sign
     val prod = ua.sig * ub.sig // 2m+2 bits, binary point after the top bit pair
     val ew = expW(f)
     val exp = (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (f.bias - 1).S
-    val rounded = roundPack(f, sign, exp, prod, false.B)
+    val rounded = roundPack(f, sign, exp, prod, false.B, toPos = toPos)
     val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
     Mux(isNaN, nan(f),
       Mux(ua.isInf || ub.isInf, packInf(f, sign),

@@ -11,8 +11,19 @@ final case class FpFormat(expBits: Int = 8, manBits: Int = 23) {
   val maxExp: Int = (1 << expBits) - 1
   /** The one NaN the units produce: sign 0, exponent all ones, fraction MSB set (fp32: 0x7FC00000). */
   val canonicalNaN: BigInt = (BigInt(maxExp) << manBits) | (BigInt(1) << (manBits - 1))
+  /** The name a knob takes (BOX_FORMAT=): a well-known name, else e<E>m<M>. */
+  def name: String = FpFormat.named.collectFirst { case (n, f) if f == this => n }.getOrElse(s"e${expBits}m$manBits")
+  /** Every value of `f` is a value of this format (so converting f to it is exact). */
+  def holds(f: FpFormat): Boolean = expBits >= f.expBits && manBits >= f.manBits
 }
 
 object FpFormat {
   val fp32: FpFormat = FpFormat(8, 23)
+  val named: Seq[(String, FpFormat)] = Seq("fp32" -> fp32, "fp24" -> FpFormat(8, 15), "bf16" -> FpFormat(8, 7), "fp16" -> FpFormat(5, 10))
+  private val Em = """e(\d+)m(\d+)""".r
+  /** fp32 | fp24 | bf16 | fp16 | e<E>m<M>; IllegalArgumentException with the accepted names otherwise. */
+  def parse(s: String): FpFormat = named.toMap.get(s.toLowerCase).getOrElse(s.toLowerCase match {
+    case Em(e, m) => FpFormat(e.toInt, m.toInt)
+    case _ => throw new IllegalArgumentException(s"format '$s' is not one of ${named.map(_._1).mkString(", ")} or e<E>m<M> (e.g. e8m10)")
+  })
 }

@@ -19,7 +19,7 @@ final class SoftFloat(val f: FpFormat) {
 
   import SoftFloat._
 
-  private def decode(x0: Long): V = {
+  private[fp] def decode(x0: Long): V = {
     val x = x0 & mask
     val neg = (x & signBit) != 0
     val ef = ((x >>> m) & f.maxExp).toInt
@@ -33,7 +33,7 @@ final class SoftFloat(val f: FpFormat) {
   private def inf(neg: Boolean): Long = (if (neg) signBit else 0L) | (f.maxExp.toLong << m)
 
   /** Round (-1)^neg * (mant * 2^exp + t) to the format, where 0 <= t < 2^exp and t > 0 iff `sticky`. mant > 0. */
-  private[fp] def round(neg: Boolean, mant: BigInt, exp: Int, sticky: Boolean): Long = {
+  private[fp] def round(neg: Boolean, mant: BigInt, exp: Int, sticky: Boolean, mode: Mode = Nearest): Long = {
     require(mant.signum > 0)
     val lead = exp + mant.bitLength - 1 // exponent of the leading bit
     var ulp = math.max(lead - m, emin - m) // exponent of the result's last place
@@ -47,7 +47,11 @@ final class SoftFloat(val f: FpFormat) {
         val rem = mant - (q << shift)
         val half = BigInt(1) << (shift - 1)
         val c = rem.compare(half)
-        val up = c > 0 || (c == 0 && (sticky || q.testBit(0)))
+        val inexact = rem.signum != 0 || sticky
+        val up = mode match {
+          case Nearest => c > 0 || (c == 0 && (sticky || q.testBit(0)))
+          case dir => inexact && away(dir, neg)
+        }
         if (up) q + 1 else q
       }
     if (r.bitLength > m + 1) { r >>= 1; ulp += 1 } // rounded up to the next power of two
@@ -55,37 +59,53 @@ final class SoftFloat(val f: FpFormat) {
     if (r.bitLength <= m) s | r.toLong // subnormal or zero (ulp == emin - m here)
     else {
       val biased = ulp + m + f.bias
-      if (biased >= f.maxExp) inf(neg)
+      if (biased >= f.maxExp) { if (mode == Nearest || away(mode, neg)) inf(neg) else s | maxFinite }
       else s | (biased.toLong << m) | (r - hidden).toLong
     }
   }
 
-  private def addExact(a: FinV, b: FinV): Long = {
+  private val maxFinite: Long = ((f.maxExp - 1).toLong << m) | ((1L << m) - 1)
+  /** Whether a directed mode rounds a value of this sign away from zero. */
+  private def away(mode: Mode, neg: Boolean): Boolean = (mode == Up && !neg) || (mode == Down && neg)
+
+  private def addExact(a: FinV, b: FinV, mode: Mode): Long = {
     val e = math.min(a.exp, b.exp)
     val sum = (a.signed << (a.exp - e)) + (b.signed << (b.exp - e))
-    if (sum.signum == 0) zero(a.neg && b.neg) // x + (-x) = +0; (-0) + (-0) = -0
-    else round(sum.signum < 0, sum.abs, e, sticky = false)
+    // x + (-x) = +0 (-0 when rounding toward -inf, IEEE 754 6.3); (-0) + (-0) = -0
+    if (sum.signum == 0) zero(if (a.neg == b.neg) a.neg else mode == Down)
+    else round(sum.signum < 0, sum.abs, e, sticky = false, mode)
   }
 
-  def add(a: Long, b: Long): Long = (decode(a), decode(b)) match {
+  private def addV(va: V, vb: V, mode: Mode): Long = (va, vb) match {
     case (NaNV, _) | (_, NaNV) => canonicalNaN
     case (InfV(x), InfV(y)) => if (x == y) inf(x) else canonicalNaN
     case (InfV(x), _) => inf(x)
     case (_, InfV(y)) => inf(y)
-    case (x: FinV, y: FinV) => addExact(x, y)
+    case (x: FinV, y: FinV) => addExact(x, y, mode)
   }
+
+  def add(a: Long, b: Long): Long = addV(decode(a), decode(b), Nearest)
 
   def neg(a: Long): Long = (a ^ signBit) & mask
   def sub(a: Long, b: Long): Long = add(a, neg(b))
+  /** a - b of format `from` (exact), rounded into this format in `mode`. */
+  def subFrom(from: SoftFloat, a: Long, b: Long, mode: Mode): Long = addV(from.decode(a), from.decode(from.neg(b)), mode)
+  /** x of format `from` in this format: exact when it fits, else rounded in `mode`. */
+  def convertFrom(from: SoftFloat, x: Long, mode: Mode): Long = from.decode(x) match {
+    case NaNV => canonicalNaN
+    case InfV(n) => inf(n)
+    case v: FinV => if (v.isZero) zero(v.neg) else round(v.neg, v.mant, v.exp, sticky = false, mode)
+  }
 
-  def mul(a: Long, b: Long): Long = (decode(a), decode(b)) match {
+  def mul(a: Long, b: Long): Long = mul(a, b, Nearest)
+  def mul(a: Long, b: Long, mode: Mode): Long = (decode(a), decode(b)) match {
     case (NaNV, _) | (_, NaNV) => canonicalNaN
     case (InfV(x), InfV(y)) => inf(x != y)
     case (InfV(x), y: FinV) => if (y.isZero) canonicalNaN else inf(x != y.neg)
     case (x: FinV, InfV(y)) => if (x.isZero) canonicalNaN else inf(x.neg != y)
     case (x: FinV, y: FinV) =>
       val p = x.mant * y.mant
-      if (p.signum == 0) zero(x.neg != y.neg) else round(x.neg != y.neg, p, x.exp + y.exp, sticky = false)
+      if (p.signum == 0) zero(x.neg != y.neg) else round(x.neg != y.neg, p, x.exp + y.exp, sticky = false, mode)
   }
 
   def div(a: Long, b: Long): Long = (decode(a), decode(b)) match {
@@ -133,11 +153,17 @@ final class SoftFloat(val f: FpFormat) {
 }
 
 object SoftFloat {
+  /** Rounding: to nearest even (every unit's default), or toward -inf (Down) / +inf (Up) for outward bounds. */
+  sealed trait Mode
+  case object Nearest extends Mode
+  case object Down extends Mode
+  case object Up extends Mode
+
   /** A decoded operand. Finite values are (-1)^neg * mant * 2^exp exactly (mant = 0 for zeros). */
-  private sealed trait V
-  private case object NaNV extends V
-  private final case class InfV(neg: Boolean) extends V
-  private final case class FinV(neg: Boolean, mant: BigInt, exp: Int) extends V {
+  private[fp] sealed trait V
+  private[fp] case object NaNV extends V
+  private[fp] final case class InfV(neg: Boolean) extends V
+  private[fp] final case class FinV(neg: Boolean, mant: BigInt, exp: Int) extends V {
     def signed: BigInt = if (neg) -mant else mant
     def isZero: Boolean = mant == 0
   }

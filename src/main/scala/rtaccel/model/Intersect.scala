@@ -51,3 +51,42 @@ object RayTriangle {
     hit
   }
 }
+
+/** The conservative slab test in a format narrower than fp32 (BOX_FORMAT=, BoxPipe's outward path), as the
+  * hardware computes it, one SoftFloat operation per hardware operation (docs/numerics.md):
+  *   d = min - o rounded down, max - o rounded up (fp32 operands, result in the narrow format);
+  *   1/d converted down and up; each plane's t = d * (1/d at the bound that keeps the product on its side),
+  *   rounded down where it bounds an entry (a min plane with 1/d >= 0, a max plane with 1/d < 0), else up;
+  *   tmin rounded down, tmax up; then the fp32 test's min/max, chains and comparison in the narrow format.
+  * A box the exact ray meets is never rejected. Returns tnear (widened to fp32, exactly) on a hit, NaN on a miss.
+  */
+final class RayBoxOutward(bf: rtaccel.fp.FpFormat) {
+  import rtaccel.fp.{FpFormat, SoftFloat}
+  import SoftFloat.{Down, Up}
+  private val s32 = new SoftFloat(FpFormat.fp32); private val sb = new SoftFloat(bf)
+  private val signShift = bf.width - 1
+  private def bits(x: Float): Long = java.lang.Float.floatToRawIntBits(x) & 0xffffffffL
+
+  def test(r: PreparedRay, tmax: Float, mnx: Float, mny: Float, mnz: Float, mxx: Float, mxy: Float, mxz: Float): Float = {
+    val mn = Array(mnx, mny, mnz); val mx = Array(mxx, mxy, mxz)
+    val o = Array(r.ox, r.oy, r.oz); val inv = Array(r.ix, r.iy, r.iz)
+    var tnear = sb.convertFrom(s32, bits(r.tmin), Down)
+    var tfar = sb.convertFrom(s32, bits(tmax), Up)
+    var a = 0
+    while (a < 3) {
+      val invBits = bits(inv(a)); val invNeg = (invBits >>> 31) == 1
+      val invLo = sb.convertFrom(s32, invBits, Down); val invHi = sb.convertFrom(s32, invBits, Up)
+      def plane(p: Float, isMax: Boolean): Long = {
+        val d = sb.subFrom(s32, bits(p), bits(o(a)), if (isMax) Up else Down)
+        val up = if (isMax) !invNeg else invNeg
+        val useHi = (((d >>> signShift) & 1) == 1) ^ up
+        sb.mul(d, if (useHi) invHi else invLo, if (up) Up else Down)
+      }
+      val t0 = plane(mn(a), isMax = false); val t1 = plane(mx(a), isMax = true)
+      tnear = sb.maxNum(tnear, sb.minProp(t0, t1))
+      tfar = sb.minNum(tfar, sb.maxProp(t0, t1))
+      a += 1
+    }
+    if (sb.le(tnear, tfar)) java.lang.Float.intBitsToFloat(s32.convertFrom(sb, tnear, Down).toInt) else Float.NaN
+  }
+}

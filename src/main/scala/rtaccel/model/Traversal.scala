@@ -32,6 +32,8 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private val cRef = new Array[Int](m); private val cT = new Array[Float](m)
   private val tri = new RayTriangle.Result
   private var slot = 0
+  // BOX_FORMAT narrower than fp32: the hardware's outward-rounded slab test (null: the fp32 test)
+  private val outward = if (p.boxFormat == rtaccel.fp.FpFormat.fp32) null else new RayBoxOutward(p.boxFormat)
   private val coord: Int => Float = k => img.primCoord(slot, k)
 
   def traceAll(rays: Rays, sink: AccessSink = AccessSink.none, stats: RayStats = new RayStats): Hits = {
@@ -182,7 +184,8 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
       val ref = img.childRef(id, j)
       if (!codec.isEmpty(ref)) {
         st.boxTests += 1
-        val tn = RayBox.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
+        val tn = if (outward == null) RayBox.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
+          else outward.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
         if (!tn.isNaN) {
           var pos = k
           while (pos > 0 && cT(pos - 1) > tn) { cRef(pos) = cRef(pos - 1); cT(pos) = cT(pos - 1); pos -= 1 }

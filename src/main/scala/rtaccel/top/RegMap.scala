@@ -42,8 +42,9 @@ object RegMap {
     Field("WAYS", 8, 8, "ways"), Field("POLICY", 16, 4, "0 dm, 1 lru, 2 plru, 3 lrp, 4 bf, 5 hybrid")))
   val PrimCache = Reg("PRIM_CACHE", 0x014, RO, "primitive cache geometry (fields as NODE_CACHE)", NodeCache.fields)
   val Formats = Reg("FORMATS", 0x018, RO, "arithmetic and memory formats", Seq(
-    Field("BOX_FP", 0, 4, "0 = fp32"), Field("TRI_FP", 4, 4, "0 = fp32"), Field("NODE_BYTES_LOG2", 8, 4, "bytes per node slot"),
-    Field("PRIM_BYTES_LOG2", 12, 4, "bytes per primitive slot"), Field("AXI_DATA_BYTES_LOG2", 16, 4, "memory bus beat")))
+    Field("BOX_FP", 0, 4, "0 = fp32, 1 = the narrower format of BOX_EXP_BITS / BOX_MAN_BITS, rounded outward"), Field("TRI_FP", 4, 4, "0 = fp32"), Field("NODE_BYTES_LOG2", 8, 4, "bytes per node slot"),
+    Field("PRIM_BYTES_LOG2", 12, 4, "bytes per primitive slot"), Field("AXI_DATA_BYTES_LOG2", 16, 4, "memory bus beat"),
+    Field("BOX_EXP_BITS", 20, 4, "exponent bits of the box test's format"), Field("BOX_MAN_BITS", 24, 5, "fraction bits of the box test's format")))
   val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
     Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,
       "end the batch and clear status, interrupts and every counter (use only while STATUS.BUSY = 0)"),

@@ -6,7 +6,8 @@ import chiseltest.simulator.VerilatorBackendAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.util.Random
 import rtaccel.config.PlatformParams
-import rtaccel.model.{PreparedRay, RayBox, RayTriangle}
+import rtaccel.fp.FpFormat
+import rtaccel.model.{PreparedRay, RayBox, RayBoxOutward, RayTriangle}
 
 /** The IU's box and triangle pipelines against the reference model's RayBox / RayTriangle, bit for bit,
   * one job per cycle: random jobs mixed with the edge classes of docs/numerics.md.
@@ -36,12 +37,18 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
     rd.tmin.poke(bits(f(9)).U)
   }
 
-  test("box pipeline == RayBox on 20000 random and edge-case nodes (M=4), one per cycle") {
-    test(new BoxPipe(p)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+  // BOX_FORMAT: fp32 against RayBox, narrower formats against RayBoxOutward (the same job stream)
+  // (make regress adds fp24; each format is one Verilator build of about a minute)
+  private val boxFormats = Seq(FpFormat.fp32 -> 20000, FpFormat.parse("bf16") -> 3000, FpFormat.parse("fp16") -> 3000) ++
+    (if (sys.env.get("RTACCEL_REGRESS").contains("full")) Seq(FpFormat.parse("fp24") -> 6000) else Nil)
+  for ((bf, n) <- boxFormats)
+  test(s"box pipeline (BOX_FORMAT=${bf.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
+    val outward = if (bf == FpFormat.fp32) None else Some(new RayBoxOutward(bf))
+    test(new BoxPipe(p.copy(boxFormat = bf))).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
       val lat = 4
       val expected = scala.collection.mutable.Queue[(Seq[Boolean], Seq[BigInt])]()
-      for (cycle <- 0 until 20000 + lat) {
-        if (cycle < 20000) {
+      for (cycle <- 0 until n + lat) {
+        if (cycle < n) {
           val (rf, r, tmax) = ray()
           val words = (0 until p.m).flatMap { c =>
             val a = Array.fill(3)(coord()); val b = Array.fill(3)(coord())
@@ -54,7 +61,7 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
           words.zipWithIndex.foreach { case (w, i) => dut.io.in.bits.words(i).poke(w.U) }
           val res = (0 until p.m).map { c =>
             def w(k: Int) = java.lang.Float.intBitsToFloat(words(7 * c + k).toInt)
-            val t = RayBox.test(r, tmax, w(0), w(1), w(2), w(3), w(4), w(5))
+            val t = outward.fold(RayBox.test(r, tmax, w(0), w(1), w(2), w(3), w(4), w(5)))(_.test(r, tmax, w(0), w(1), w(2), w(3), w(4), w(5)))
             (!t.isNaN && words(7 * c + 6) != 0, bits(if (t.isNaN) 0f else t))
           }
           expected.enqueue((res.map(_._1), res.map(_._2)))

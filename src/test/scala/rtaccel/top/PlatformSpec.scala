@@ -34,11 +34,11 @@ class PlatformSpec extends AnyFunSuite {
 
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
-                     short: Int = 0) = {
+                     short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
-      shortStack = short)
+      shortStack = short, boxFormat = box)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed))
@@ -114,6 +114,17 @@ class PlatformSpec extends AnyFunSuite {
       assert(j("model_restarts").num > 0 && j("node_requests").num > full("node_requests").num, "the test ring must restart")
       assert(j("short_stack").num == ring && j("overflowed").num == 0)
     }
+
+  // BOX_FORMAT: the outward-rounded box test in the IU equals model.RayBoxOutward in the model's traversal;
+  // it can only add traversal work, so the RTL fetches at least the fp32 platform's nodes.
+  test("BOX_FORMAT=bf16 at 4 TUs with a DM node cache: bit-exact against the model, no fewer node fetches than fp32") {
+    val bf = runOne(4, 4, 4, rays, scene, node = CacheParams(64, 1, CachePolicy.Dm), box = rtaccel.fp.FpFormat.parse("bf16"))
+    val fp = runOne(4, 4, 4, rays, scene, node = CacheParams(64, 1, CachePolicy.Dm))
+    info(f"node fetches: bf16 ${bf.json("node_requests").num}%.0f, fp32 ${fp.json("node_requests").num}%.0f")
+    assert(bf.json("node_requests").num >= fp.json("node_requests").num && bf.json("box_format").str == "bf16")
+    val agree = (0 until rays.count).count(i => bf.hits.prim(i) == fp.hits.prim(i))
+    info(s"$agree of ${rays.count} rays hit the same primitive as with fp32 boxes")
+  }
 
   test("random memory latency and host backpressure change no result") {
     val quiet = runOne(4, 4, 4, rays, scene).json
