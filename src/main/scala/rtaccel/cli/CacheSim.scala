@@ -18,7 +18,9 @@ object CacheSim {
   def main0(a: Args): Unit = {
     val p0 = Cli.params(a) // refuses bad cache values before the scene is loaded
     val tus = p0.tus // the preset's TUs unless TUS= is given (paper2017: 32); TUS=1 replays one TU's order
+    val tLoad = System.nanoTime()
     val (scene, rays, _) = Cli.inputs(a)
+    val loadS = (System.nanoTime() - tLoad) / 1e9 // ~0 when Serve kept the scene and rays
     val b = Cli.build(scene, p0, a)
     val p = b.params
     val (node, prim) = (p.nodeCache, p.primCache)
@@ -76,7 +78,8 @@ object CacheSim {
       "predicted_rays_per_s" -> pred.raysPerCycle * p.cyclesPerSecond,
       "predicted_cycles_per_ray" -> ujson.Obj("latency_one_tu" -> pred.latencyCycles, "dram" -> pred.dramCycles, "beats" -> pred.beatCycles),
       "predicted_note" -> "MVA of TUS rays in flight over DRAM and the MC response port (rtaccel.cache.Throughput); ignores head-of-line blocking",
-      "trace_s" -> (if (traceReused) 0.0 else traceS), "trace_reused" -> traceReused, "wall_s" -> wall, "accesses_per_s" -> accesses / math.max(wall, 1e-9),
+      "trace_s" -> (if (traceReused) 0.0 else traceS), "trace_reused" -> traceReused,
+      "load_s" -> loadS, "bvh_build_s" -> b.buildSeconds, "wall_s" -> wall, "accesses_per_s" -> accesses / math.max(wall, 1e-9),
       "repeat" -> repeat, "wall_s_first" -> runs.head._2)
     println(ujson.write(j))
   }
