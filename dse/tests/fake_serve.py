@@ -6,11 +6,13 @@ simulate: rays/s = 0.8 x the prediction. area: refused like a build without FIDE
 FAKE_SERVE_AREA=1; then lut = 1000 * TUS + NODE_CACHE, bram36 = NODE_CACHE / 64, fits when lut <= 3000.
 FAKE_SERVE_REFUSE_TUS=n: every run with TUS=n is refused (status 2); FAKE_SERVE_CHECK_FAIL_TUS=n: its RTL run
 fails a check (status 3); FAKE_SERVE_CRASH_TUS=n: the server process dies on its cachesim request.
+FAKE_SERVE_SLEEP=s: each answer takes s seconds (so a test can kill a sweep in the middle).
 Every request is appended to $FAKE_SERVE_LOG (one JSON line) so the tests see which runs were made.
 """
 import json
 import os
 import sys
+import time
 
 
 def answer(cmd, a):
@@ -51,6 +53,7 @@ def main():
         a = {k[2:]: v for k, v in zip(args[0::2], args[1::2])}
         with open(os.environ["FAKE_SERVE_LOG"], "a") as f:
             f.write(json.dumps([req["cmd"], a]) + "\n")
+        time.sleep(float(os.environ.get("FAKE_SERVE_SLEEP", "0")))
         status, result, error = answer(req["cmd"], a)
         print(json.dumps({"status": status, "result": result, "error": error, "wall_s": 0.001}), flush=True)
 

@@ -39,6 +39,14 @@ def stored(out):
         return db.execute("SELECT fidelity, status, config, error FROM runs").fetchall()
 
 
+def count(out):
+    """Rows in the store while a sweep may still be creating it."""
+    try:
+        return len(stored(out)) if (out / "store.sqlite").exists() else 0
+    except sqlite3.OperationalError:
+        return 0
+
+
 def test_grid_then_rerun_evaluates_nothing(tmp_path, capsys, local_ray):
     sp, out = spaces.tiny(tmp_path), tmp_path / "out"
     jv, log = java(tmp_path)
@@ -153,3 +161,37 @@ def test_cost_rung_unavailable_is_recorded_as_skipped(tmp_path, capsys, local_ra
     assert [p["config"]["TUS"] for p in j["pareto"]] == [2]  # ranked on rays/s alone, with a note
     assert "Not ranked on lut" in (out / "front.md").read_text()
     assert (out / "pareto_cache_kib.png").exists()
+
+
+def test_random_strategy_draws_n_distinct_points_reproducibly(tmp_path, capsys, local_ray):
+    sp = spaces.tiny(tmp_path, extra='[strategy]\nkind = "random"\nn = 5\nseed = 7\n')
+    jv, log = java(tmp_path)
+    rc, j = dse(capsys, sp, tmp_path / "a", jv)
+    first = sorted(json.dumps(r[1], sort_keys=True) for r in requests(log))
+    rc2, j2 = dse(capsys, sp, tmp_path / "b", jv)  # another store: evaluated again, the same 5 points
+    assert rc == rc2 == 0 and j["points"] == j2["points"] == 5 and j2["evaluated"] == 5
+    assert len(set(first)) == 5 and sorted(json.dumps(r[1], sort_keys=True) for r in requests(log)[5:]) == first
+
+
+def test_a_sweep_killed_by_a_signal_resumes(tmp_path, capsys):
+    """SIGKILL of the driver mid-sweep (inline worker, WORKERS=0): every run committed before the kill is
+    reused, only the rest is evaluated."""
+    import signal
+    import subprocess
+    import time
+
+    from dse.knobs import ROOT
+
+    sp, out = spaces.tiny(tmp_path), tmp_path / "out"
+    jv, log = java(tmp_path, SLEEP=0.3)
+    p = subprocess.Popen([sys.executable, "-m", "dse.explore", "--space", str(sp), "--out", str(out), "--workers", "0",
+                          "--java", jv, "--version", "t1"], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    t0 = time.time()
+    while time.time() - t0 < 60 and count(out) < 3:
+        time.sleep(0.1)
+    p.send_signal(signal.SIGKILL)
+    p.wait()
+    done = len(stored(out))
+    assert 3 <= done < 9
+    rc, j = dse(capsys, sp, out, java(tmp_path)[0], workers=0)
+    assert rc == 0 and (j["evaluated"], j["skipped"]) == (9 - done, done)
