@@ -31,10 +31,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area lint simulate soak regress paper-nocache paper-caches bench-caches dse
+        yosys verilog area cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | regress | paper-nocache | paper-caches | bench-caches | dse   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -157,6 +157,16 @@ verilog: deps
 area: deps yosys
 	@$(JAVA) rtaccel.cli.Area --config $(VCONFIG) $(PLATFORM_KNOBS) \
 	  $(if $(FIDELITY),--fidelity $(FIDELITY)) $(if $(UNIT),--unit $(UNIT)) $(if $(OUT),--out $(OUT))
+
+# The fitted cost model (FIDELITY=model) from the syntheses of boards/cost-calibration.json (cached per circuit);
+# writes boards/cost-model.json with its error on the validation configurations.
+cost-model: deps yosys
+	@$(JAVA) rtaccel.cli.CostFit --calibration boards/cost-calibration.json --out $(or $(OUT),boards/cost-model.json) \
+	  $(if $(CACHED_ONLY),--cached-only $(CACHED_ONLY))
+
+# Largest TU count that fits BOARD (cost model), confirmed by one synthesis (CONFIRM=0 skips it).
+max-tus: deps yosys
+	@$(JAVA) rtaccel.cli.MaxTus --config $(VCONFIG) $(PLATFORM_KNOBS) $(if $(CONFIRM),--confirm $(CONFIRM)) $(if $(OUT),--out $(OUT))
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.
 LINT_WAIVERS = tools/lint.vlt

@@ -14,7 +14,8 @@ lazy val root = (project in file("."))
       "edu.berkeley.cs"   %% "chiseltest" % "6.0.0", // also used by the simulate entry point
       "org.scalatest"     %% "scalatest"  % "3.2.19" % Test,
       "com.lihaoyi"       %% "ujson"      % "3.1.0",
-      "com.github.scopt"  %% "scopt"      % "4.1.0" // command-line flags of the entry points (cli/Flags)
+      "com.github.scopt"  %% "scopt"      % "4.1.0", // command-line flags of the entry points (cli/Flags)
+      "org.apache.commons" % "commons-math3" % "3.6.1" // least squares of the fitted cost model (cli/CostFit)
     ),
     addCompilerPlugin("org.chipsalliance" % "chisel-plugin" % chiselVersion cross CrossVersion.full),
     scalacOptions ++= Seq("-language:reflectiveCalls", "-deprecation", "-feature", "-Xcheckinit", "-Ymacro-annotations"),

@@ -8,8 +8,6 @@ final case class Resources(lut: Long = 0, lutram: Long = 0, ff: Long = 0, dsp: L
   def bram36: Double = bram18 / 2.0
   def +(o: Resources): Resources = Resources(lut + o.lut, lutram + o.lutram, ff + o.ff, dsp + o.dsp, bram18 + o.bram18, carry + o.carry)
   def *(k: Long): Resources = Resources(lut * k, lutram * k, ff * k, dsp * k, bram18 * k, carry * k)
-  /** What a board's capacity is checked against: logic LUTs + LUT RAM both occupy LUT6 sites. */
-  def used: Seq[(String, Double)] = Seq("lut" -> (lut + lutram).toDouble, "ff" -> ff.toDouble, "dsp" -> dsp.toDouble, "bram36" -> bram36)
   def json: ujson.Obj = ujson.Obj("lut" -> lut.toDouble, "lutram" -> lutram.toDouble, "ff" -> ff.toDouble, "dsp" -> dsp.toDouble,
     "bram36" -> bram36, "carry" -> carry.toDouble)
 }

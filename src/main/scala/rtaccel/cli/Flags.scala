@@ -45,8 +45,12 @@ object Flags {
   val simulate: Seq[Flag] = inputs ++ platform ++ simOptions :+ f("out", "output folder")
   val sweepTus: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts"))
   val verilog: Seq[Flag] = platform :+ f("out", "output folder")
-  val area: Seq[Flag] = verilog ++ Seq(f("fidelity", "yosys"),
-    f("unit", "one module to synthesize instead of the board top (UNIT=)"), f("cache", "synthesis cache folder"))
+  val area: Seq[Flag] = verilog ++ Seq(f("fidelity", "yosys (a real synthesis) or model (the fitted cost model)"),
+    f("unit", "one module to synthesize instead of the board top (UNIT=)"), f("cache", "synthesis cache folder"),
+    f("cost-model", "fitted cost model file (default boards/cost-model.json)"))
+  val costFit: Seq[Flag] = Seq(f("calibration", "calibration plan (boards/cost-calibration.json)"), f("out", "fitted model file"),
+    f("cache", "synthesis cache folder"), f("catalog", "board catalog file"), f("cached-only", "1: fit from the cached syntheses only, leaving out the others"))
+  val maxTus: Seq[Flag] = area ++ Seq(f("confirm", "1 (default) confirms the answer with one real synthesis"), f("max", "largest TU count tried"))
 
   /** Levenshtein distance, for the "did you mean" of a misspelled flag. */
   def distance(a: String, b: String): Int = {

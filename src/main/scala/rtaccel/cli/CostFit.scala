@@ -1,0 +1,140 @@
+package rtaccel.cli
+
+import java.nio.file.{Files, Paths}
+import org.apache.commons.math3.linear.{Array2DRowRealMatrix, ArrayRealVector, SingularValueDecomposition}
+import rtaccel.area.{Boards, CostModel, Synthesis, Synthesized}
+import rtaccel.config.PlatformParams
+import rtaccel.io.InputError
+
+/** make cost-model: fits area.CostModel's coefficients from the real syntheses of a calibration plan
+  * (boards/cost-calibration.json: `train` configurations and units, `validate` whole configurations it is
+  * not fitted on, `scale` the same configuration on other families), then reports the model's error on the
+  * validation set and writes boards/cost-model.json. Syntheses are cached per circuit (make area's cache),
+  * so a refit after a change to the model alone takes seconds.
+  */
+object CostFit {
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.costFit)(main0)
+
+  final case class Point(name: String, p: PlatformParams, top: String, family: String)
+
+  private def points(plan: ujson.Value, key: String, family: String, path: java.nio.file.Path): Seq[Point] =
+    plan.obj.get(key).map(_.arr.toSeq).getOrElse(Nil).map { e =>
+      val name = e("name").str
+      val argv = e("flags").arr.map(_.str).toArray
+      val a = try Flags.parse(argv, Flags.area) catch { case x: InputError => throw new InputError(s"$path: $key '$name': ${x.getMessage}") }
+      val p = EmitVerilog.preset(a, s"$path: $key '$name'")
+      Point(name, p, a.get("unit", "RtAccelTop"), e.obj.get("family").map(_.str).getOrElse(family))
+    }
+
+  def main0(a: Args): Unit = {
+    val t0 = System.nanoTime()
+    val planPath = Paths.get(a.get("calibration", "boards/cost-calibration.json"))
+    if (!Files.isRegularFile(planPath)) throw new InputError(s"calibration plan $planPath not found")
+    val plan = try ujson.read(Files.readString(planPath)) catch { case e: ujson.ParseException => throw new InputError(s"$planPath is not JSON: ${e.getMessage}") }
+    val family = plan("family").str
+    if (!Boards.families(family)) throw new InputError(s"$planPath: family '$family' is not one of ${Boards.families.toSeq.sorted.mkString(", ")}")
+    val cache = Paths.get(a.get("cache", "build/area-cache"))
+    val rtl = Paths.get("build/cost-model/rtl")
+    val train = points(plan, "train", family, planPath); val validate = points(plan, "validate", family, planPath)
+    val scale = points(plan, "scale", family, planPath)
+    val all = train ++ validate ++ scale
+    var done = 0
+    // --cached-only 1: refit from the syntheses already in the cache, leaving out the points that are not
+    val cachedOnly = a.get("cached-only", "0") == "1"
+    def synthOpt(pt: Point): Option[Synthesized] = {
+      done += 1
+      System.err.println(f"[cost-model] $done/${all.length} ${pt.name} (${pt.top}, ${pt.family})")
+      try Some(Synthesis.run(pt.p, pt.family, pt.top, rtl, cache, line => System.err.println(s"[cost-model]   $line"), cachedOnly))
+      catch { case e: Synthesis.NotCached => System.err.println(s"[cost-model]   not cached, left out: ${e.getMessage}"); None }
+    }
+    def synth(pt: Point): Synthesized = synthOpt(pt).get
+    val trained = train.flatMap(pt => synthOpt(pt).map(pt -> _))
+    if (trained.isEmpty) throw new InputError("no training synthesis available; run make cost-model without --cached-only")
+    val coef = fit(trained)
+    val base = CostModel.Fitted(coef, family, trained.head._2.yosysVersion, Map(family -> CostModel.resources.map(_ -> 1.0).toMap), ujson.Obj())
+
+    // validation: whole configurations the fit has not seen, and the model's instance counts against the hierarchy's
+    val rows = validate.flatMap(pt => synthOpt(pt).map(pt -> _)).map { case (pt, s) =>
+      val got = CostModel.resources.map(r => r -> CostModel.get(s.total, r)).toMap
+      val predicted = base.predict(pt.p, family)
+      val measured = CostModel.decompose(s)
+      for ((u, _, n) <- predicted if measured.get(u).exists(_._2 != n))
+        throw new CheckFailed(Seq(s"${pt.name}: the model counts $n x $u, the synthesis ${measured(u)._2}"))
+      val want = base.total(pt.p, family)
+      (pt, got, want)
+    }
+    val err = rows.map { case (pt, got, want) => pt -> CostModel.resources.map(r => r -> relErr(want(r), got(r))).toMap }
+    // other families: the same configuration synthesized there, over its synthesis on the calibrated family
+    val scales = scale.groupBy(_.family).map { case (fam, pts) =>
+      val ratios = pts.flatMap(pt => synthOpt(pt).zip(synthOpt(pt.copy(family = family)))).map { case (s1, s0) =>
+        val there = s1.total; val here = s0.total
+        CostModel.resources.map(r => r -> (if (CostModel.get(here, r) == 0) 1.0 else CostModel.get(there, r) / CostModel.get(here, r))).toMap
+      }
+      fam -> CostModel.resources.map(r => r -> ratios.map(_(r)).sum / ratios.length).toMap
+    }
+    val summary = ujson.Obj.from(CostModel.resources.filter(_ != "carry").map { r =>
+      val e = err.map(_._2(r)).filterNot(_.isNaN).map(math.abs).sorted
+      r -> ujson.Obj("median_abs" -> (if (e.isEmpty) 0.0 else e(e.length / 2)), "max_abs" -> (if (e.isEmpty) 0.0 else e.last))
+    })
+    val json = ujson.Obj(
+      "rtaccel" -> Cli.version, "yosys_version" -> base.yosysVersion, "family" -> family, "plan" -> planPath.toString,
+      "units" -> ujson.Obj.from(coef.toSeq.sortBy(_._1).map { case (u, rs) => u -> ujson.Obj.from(rs.toSeq.sortBy(_._1).map { case (r, fs) =>
+        r -> ujson.Obj.from(fs.toSeq.sortBy(_._1).map { case (k, v) => k -> ujson.Num(v) }) }) }),
+      "family_scale" -> ujson.Obj.from((scales + (family -> CostModel.resources.map(_ -> 1.0).toMap)).toSeq.sortBy(_._1).map { case (f, rs) =>
+        f -> ujson.Obj.from(rs.toSeq.sortBy(_._1).map { case (r, v) => r -> ujson.Num(v) }) }),
+      "trained_on" -> ujson.Arr.from(train.map(pt => ujson.Str(s"${pt.name} (${pt.top})"))),
+      "validation" -> ujson.Arr.from(rows.zip(err).map { case ((pt, got, want), (_, e)) =>
+        ujson.Obj("name" -> pt.name, "tus" -> pt.p.tus, "m" -> pt.p.m,
+          "yosys" -> ujson.Obj.from(got.toSeq.sortBy(_._1).map { case (k, v) => k -> ujson.Num(v) }),
+          "model" -> ujson.Obj.from(want.toSeq.sortBy(_._1).map { case (k, v) => k -> ujson.Num(math.rint(v * 10) / 10) }),
+          "rel_err" -> ujson.Obj.from(e.toSeq.sortBy(_._1).filterNot(_._2.isNaN).map { case (k, v) => k -> ujson.Num(math.rint(v * 1e4) / 1e4) })) }),
+      "validation_summary" -> summary)
+    printTable(rows, err)
+    val out = Paths.get(a.get("out", CostModel.defaultPath.toString))
+    Cli.writeText(out, ujson.write(json, indent = 2) + "\n")
+    CostModel.fromJson(json) // what was written reads back
+    println(ujson.write(ujson.Obj("cost_model" -> out.toString, "family" -> family, "trained" -> train.length, "validated" -> validate.length,
+      "validation_summary" -> summary, "wall_s" -> (System.nanoTime() - t0) / 1e9)))
+  }
+
+  /** Relative error of the model against Yosys; NaN where both are 0 (nothing to be wrong about). */
+  def relErr(model: Double, yosys: Double): Double =
+    if (yosys == 0) { if (model == 0) Double.NaN else 1.0 } else (model - yosys) / yosys
+
+  /** Least squares per unit and resource over the training syntheses that contain the unit. The SVD solve is
+    * the minimum-norm solution, so a feature the training set never varies gets no weight instead of failing.
+    */
+  def fit(trained: Seq[(Point, Synthesized)]): Map[String, Map[String, Map[String, Double]]] = {
+    val samples = trained.flatMap { case (pt, s) =>
+      CostModel.decompose(s).toSeq.flatMap { case (u, (r, n)) => CostModel.units.find(_.name == u).map(un => (un, pt.p, r, n)) }
+    }
+    samples.groupBy(_._1).map { case (u, ss) =>
+      u.name -> CostModel.resources.map { res =>
+        val rows = ss.map { case (_, p, r, n) => (CostModel.featuresFor(u, res, u.features(p)), CostModel.get(r, res) / (if (u.perInstance) n else 1)) }
+        res -> solve(rows)
+      }.toMap
+    }
+  }
+
+  def solve(rows: Seq[(Seq[(String, Double)], Double)]): Map[String, Double] = {
+    val names = rows.head._1.map(_._1)
+    // columns that never vary from zero carry nothing; the rest are scaled to unit size for a well-posed solve
+    val used = names.indices.filter(j => rows.exists(_._1(j)._2 != 0))
+    if (used.isEmpty) return names.map(_ -> 0.0).toMap
+    val norm = used.map(j => rows.map(r => math.abs(r._1(j)._2)).max)
+    val x = new Array2DRowRealMatrix(rows.map(r => used.zip(norm).map { case (j, s) => r._1(j)._2 / s }.toArray).toArray)
+    val y = new ArrayRealVector(rows.map(_._2).toArray)
+    val b = new SingularValueDecomposition(x).getSolver.solve(y)
+    names.map(_ -> 0.0).toMap ++ used.zip(norm).zipWithIndex.map { case ((j, s), i) => names(j) -> b.getEntry(i) / s }
+  }
+
+  private def printTable(rows: Seq[(Point, Map[String, Double], Map[String, Double])], err: Seq[(Point, Map[String, Double])]): Unit = {
+    val e = Console.err
+    e.println(f"[cost-model] validation (configurations not fitted on): yosys / model / error")
+    e.println(f"  ${"config"}%-14s ${"TUs"}%4s ${"M"}%2s ${"LUT"}%24s ${"FF"}%22s ${"DSP"}%16s ${"BRAM36"}%20s")
+    for (((pt, got, want), (_, er)) <- rows.zip(err)) {
+      def cell(r: String) = f"${got(r)}%.0f/${want(r)}%.0f/${if (er(r).isNaN) 0.0 else er(r) * 100}%+.1f%%"
+      e.println(f"  ${pt.name}%-14s ${pt.p.tus}%4d ${pt.p.m}%2d ${cell("lut")}%24s ${cell("ff")}%22s ${cell("dsp")}%16s ${cell("bram36")}%20s")
+    }
+  }
+}
