@@ -14,6 +14,9 @@ from . import store
 from .knobs import flags
 
 CHEAP = ("cachesim", "area")
+# make area's refusals that mean "no cost model in this build or checkout" (a build before FIDELITY=model, or
+# boards/cost-model.json not made yet by make cost-model), not "this configuration is bad"
+UNAVAILABLE = ("FIDELITY=model is not available", "cost model ", "FIDELITY=model")
 
 
 def task_args(fidelity, config, scene, out, board=None):
@@ -38,7 +41,7 @@ def classify(fidelity, answer):
     if fidelity == "area":
         if st == 3 and isinstance(res, dict) and res.get("fits") is False:
             return "infeasible", err
-        if st == 2 and err and "FIDELITY" in err:
+        if st == 2 and err and any(w in err for w in UNAVAILABLE):
             return store.SKIPPED, f"cost rung unavailable: {err}"
     if st == 0 and not isinstance(res, dict):
         return store.CRASHED, "status 0 but no JSON result"
