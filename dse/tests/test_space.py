@@ -99,3 +99,11 @@ def _toml(v):
     if isinstance(v, bool):
         return "true" if v else "false"
     return f'"{v}"' if isinstance(v, str) else repr(v)
+
+
+def test_an_error_in_the_second_scene_names_its_line(tmp_path):
+    text = GOOD.replace("[axes]", '[[scenes]]\nprocedural = "soup"\nwidth = -3\n\n[axes]')
+    p = write(tmp_path, text)
+    with pytest.raises(UserError) as e:
+        space.load(p)
+    assert str(e.value).startswith(f"{p}:{line_no(text, 'width = -3')}: width must be"), str(e.value)
