@@ -7,6 +7,7 @@ store.sqlite, points.csv, runs.csv, front.md, report.md, pareto_*.png (dse/repor
 {"space","points","evaluated","skipped","failed","confirmed_rtl","pareto","store","wall_s",...}.
 Exit 0 when the sweep completed (failed points are data), 2 on a bad space file or arguments (nothing written).
 """
+import argparse
 import hashlib
 import itertools
 import json
@@ -151,7 +152,8 @@ class Sweep:
             row = self.store.get(key)
             if row is not None:
                 self._count(fid, "skipped")
-                self._count(fid, "failed") if row["status"] in (st.REFUSED, st.CHECK_FAILED, st.CRASHED) else None
+                if row["status"] in st.FAILED:
+                    self._count(fid, "failed")
                 out[(st.point_id(c), s["name"] if s else "")] = row
                 self._tick(fid)
             else:
@@ -167,7 +169,7 @@ class Sweep:
                            r["answer"].get("status"), err, res, r["wall_s"])
             out[(st.point_id(c), s["name"] if s else "")] = {"status": status, "error": err, "result": res, "wall_s": r["wall_s"]}
             self._count(fid, "evaluated")
-            if status in (st.REFUSED, st.CHECK_FAILED, st.CRASHED):
+            if status in st.FAILED:
                 self._count(fid, "failed")
                 bar.write(f"[dse] {fid} {st.point_id(c)} {s['name'] if s else ''}: {status}: {err}")
             self._tick(fid)
@@ -259,7 +261,7 @@ def main(argv=None):
     ap.add_argument("--ray-address", default="")
     ap.add_argument("--java", default=os.environ.get("RTACCEL_JAVA", ""))
     ap.add_argument("--version", default=os.environ.get("RTACCEL_VERSION", "unknown"))
-    ap.add_argument("--stop-after", type=int, default=None, help=argparse_hidden())
+    ap.add_argument("--stop-after", type=int, default=None, help=argparse.SUPPRESS)  # tests: a kill after K runs
     a = ap.parse_args(argv)
     t0 = time.time()
     sp = spacefile.load(a.space)
@@ -293,12 +295,6 @@ def main(argv=None):
         "by_fidelity": c, "rung_error": summary["rung_error"], "best_per_board": summary["best_per_board"],
         "csv": summary["csv"], "time_split": summary["time_split"], "workers": len(stats), "rtaccel": a.version}))
     return 0
-
-
-def argparse_hidden():
-    import argparse
-
-    return argparse.SUPPRESS
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@ and never plotted or ranked.
 """
 import os
 import statistics
+import sys
 
 from . import pareto, rungs, store as st
 from .common import save_png, write_text
@@ -188,7 +189,7 @@ def write(sp, scenes, out, version, sums, rtl, confirmed, counts, stats, times):
     md = _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums, split)
     write_text(os.path.join(out, "front.md"), prov.replace("# ", "<!-- ", 1).rstrip() + " -->\n" + md["front"])
     write_text(os.path.join(out, "report.md"), prov.replace("# ", "<!-- ", 1).rstrip() + " -->\n" + md["report"])
-    print(md["front"], file=__import__("sys").stderr)
+    print(md["front"], file=sys.stderr)
     _plots(sp, out, prov, sums, on_front, set(confirmed), scenes, rtl)
     return {"pareto": pareto_json, "rung_error": err_summary, "best_per_board": best, "csv": csv_path, "time_split": split}
 

@@ -13,7 +13,6 @@ import os
 from . import store
 from .knobs import flags
 
-CHEAP = ("cachesim", "area")
 # make area's refusals that mean "no cost model in this build or checkout" (a build before FIDELITY=model, or
 # boards/cost-model.json not made yet by make cost-model), not "this configuration is bad"
 UNAVAILABLE = ("FIDELITY=model is not available", "cost model ", "FIDELITY=model")

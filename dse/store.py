@@ -12,6 +12,7 @@ import time
 
 OK, REFUSED, CHECK_FAILED, CRASHED, SKIPPED = "ok", "refused", "check_failed", "crashed", "skipped"
 STATUS_OF_EXIT = {0: OK, 2: REFUSED, 3: CHECK_FAILED}
+FAILED = (REFUSED, CHECK_FAILED, CRASHED)  # what the JSON's "failed" counts; skipped and infeasible are not failures
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS runs (
