@@ -74,4 +74,13 @@ class ServeSpec extends AnyFunSuite {
       assert(Files.isRegularFile(out.resolve("levels.csv")))
     }
   }
+
+  test("a command that throws answers status 1 with the exception; the next request is served") {
+    served {
+      val a = Serve.answer(request("analyze", base ++ Seq("--out", "/proc/no-such-dir/x", "--mppls", "4")))
+      assert(a("status").num == 1 && a("result").isNull, a)
+      assert(a("error").str.contains("analyze crashed") && a("error").str.contains("/proc/no-such-dir"), a)
+      assert(Serve.answer(request("cachesim", base))("status").num == 0)
+    }
+  }
 }
