@@ -31,10 +31,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches
+        yosys verilog area cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -230,6 +230,17 @@ paper-caches: deps
 	  [ -z "$$f11" ] || { $(PY) -m dse.plot_caches fig11 build/paper-caches/fig11_miss_rate.png $$f11 && \
 	    $(PY) -m dse.plot_caches bytes build/paper-caches/fig8_9_bytes_per_ray.png $$f89; } || exit $$?; \
 	  [ -z "$$tus" ] || $(PY) -m dse.plot_tus build/paper-caches/fig12_13_tus.png $$tus
+
+# Design-space exploration (docs/dse.md): the points of SPACE=<space file> evaluated on WORKERS Ray workers, each
+# keeping one JVM (rtaccel.cli.Serve) between points; a local Ray instance unless RAY_ADDRESS names a cluster.
+# Results, CSV, plots and the SQLite store in OUT (default build/dse/<space>); a rerun evaluates only what is missing.
+WORKERS ?= 2
+DSE_HEAP ?= 3g
+DSE_JAVA = java -Xss64m -Xmx$(DSE_HEAP) -Drtaccel.version=$(VERSION) -cp "$$(cat $(ROOT)/$(CP_FILE))"
+dse: deps
+	@test -n "$(SPACE)" || { echo "error: give SPACE=<space file>, e.g. SPACE=dse/spaces/smoke.toml" >&2; exit 2; }
+	@$(PY) -m dse.explore --space $(SPACE) --workers $(WORKERS) $(if $(RAY_ADDRESS),--ray-address $(RAY_ADDRESS)) \
+	  $(if $(OUT),--out $(OUT)) --java '$(DSE_JAVA)' --version $(VERSION)
 
 # ---------------------------------------------------------------- tests
 FIXTURE_SCENES := cornell hairball soup extreme

@@ -73,7 +73,8 @@ object Cli {
     */
   def build(scene: Scene, p0: PlatformParams, fit: Boolean, stack: Option[Int] = None): Built = {
     val t0 = System.nanoTime()
-    val bvh = Mbvh.build(scene, p0)
+    // the tree depends on the scene and these fields only (Mbvh.build); Serve keeps it between requests
+    val bvh = Memo("bvh", (new Memo.Id(scene), p0.m, p0.mppl, p0.sahBins, p0.nodeAccessBytes, p0.primAccessBytes))(Mbvh.build(scene, p0))
     val secs = (System.nanoTime() - t0) / 1e9
     val need = Fit.needs(bvh).stackDepth
     val p = stack match {
@@ -96,10 +97,12 @@ object Cli {
 
   /** The scene and rays as the host driver uploads them: scaled by one power of two (see Normalize). */
   def inputs(a: Args): (Scene, Rays, Int) = {
-    val raw = Scene.load(a.path("tris"))
-    val rays = Rays.load(a.path("rays"))
-    val e = Normalize.exponent(raw)
-    (Normalize.scene(raw, e), Normalize.rays(rays, e), e)
+    // Serve keeps both between requests (Memo); the scene is the same object then, so its tree is found too
+    val (scene, e) = Memo.file("scene", a.path("tris")) {
+      val raw = Scene.load(a.path("tris")); val e = Normalize.exponent(raw); (Normalize.scene(raw, e), e)
+    }
+    val rays = Memo.file("rays", a.path("rays"), e)(Normalize.rays(Rays.load(a.path("rays")), e))
+    (scene, rays, e)
   }
 
   def writeText(path: Path, text: String): Unit = Npy.atomicWrite(path, text.getBytes("UTF-8"))

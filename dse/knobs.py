@@ -1,0 +1,78 @@
+"""The knobs a space file may name: each Makefile variable, the rtaccel.cli flag it becomes, and its legal values.
+
+One table, so that a space file, the JVM requests and the `make verilog ...` command of a result all spell a knob
+the same way. The checks here are the ones a space file can be refused for up front; combinations the platform
+refuses (e.g. MPPL over a preset's leaf count field) are refused by the JVM and recorded as failed points.
+"""
+import json
+import os
+from dataclasses import dataclass
+
+from scenes.procedural import NAMES as PROCEDURAL_SCENES  # noqa: F401  (re-exported for dse.space)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PRESETS = ("fit", "paper2017", "paper2017-lrp", "small")  # rtaccel.config.Presets.all plus CONFIG=fit
+POLICIES = ("dm", "lru", "plru", "lrp", "bf", "hybrid")   # rtaccel.config.CachePolicy.parse
+
+
+def boards(catalog=os.path.join(ROOT, "boards", "catalog.json")):
+    with open(catalog) as f:
+        return json.load(f)["boards"]
+
+
+def _pow2(v):
+    return isinstance(v, int) and v > 0 and v & (v - 1) == 0
+
+
+@dataclass(frozen=True)
+class Knob:
+    flag: str
+    rule: str          # what the error message says is allowed
+    ok: object         # value -> bool
+    cost: bool = True  # changes the circuit (so the area rung and `make verilog` see it)
+
+
+def _int(lo, hi):
+    return lambda v: isinstance(v, int) and not isinstance(v, bool) and lo <= v <= hi
+
+
+def _one_of(names):
+    return lambda v: v in names
+
+
+def _cache(v):
+    return v == 0 or (_pow2(v) and v <= 1 << 16)
+
+
+KNOBS = {
+    "CONFIG": Knob("--config", f"one of {', '.join(PRESETS)}", _one_of(PRESETS)),
+    "TUS": Knob("--tus", "an integer 1..1024", _int(1, 1024)),
+    "M": Knob("--m", "2, 4 or 8", _one_of((2, 4, 8))),
+    "MPPL": Knob("--mppl", "an integer 1..16", _int(1, 16)),
+    "STACK": Knob("--stack-depth", "an integer 1..4096", _int(1, 4096)),
+    "SHORT_STACK": Knob("--short-stack", "an integer 1..4096", _int(1, 4096)),
+    "NODE_CACHE": Knob("--node-cache", "0 or a power of two up to 65536", _cache),
+    "NODE_WAYS": Knob("--node-ways", "a power of two 1..64", lambda v: _pow2(v) and v <= 64),
+    "NODE_POLICY": Knob("--node-policy", f"one of {', '.join(POLICIES)}", _one_of(POLICIES)),
+    "MAX_LEVEL": Knob("--max-level", "an integer 0..15", _int(0, 15)),
+    "PRIM_CACHE": Knob("--prim-cache", "0 or a power of two up to 65536", _cache),
+    "PRIM_WAYS": Knob("--prim-ways", "a power of two 1..64", lambda v: _pow2(v) and v <= 64),
+    "PRIM_POLICY": Knob("--prim-policy", f"one of {', '.join(POLICIES)}", _one_of(POLICIES)),
+    "BOARD": Knob("--board", "a board of boards/catalog.json", lambda v: isinstance(v, str) and v in boards()),
+    "MEM_GBPS": Knob("--mem-gbps", "a number > 0", lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0, cost=False),
+    "CLOCK_MHZ": Knob("--clock-mhz", "a number > 0", lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0, cost=False),
+}
+
+
+def flags(config):
+    """rtaccel.cli flags of a configuration {KNOB: value} (knobs in table order, so the args are canonical)."""
+    out = []
+    for k, knob in KNOBS.items():
+        if k in config:
+            out += [knob.flag, str(config[k])]
+    return out
+
+
+def verilog_command(config):
+    """The exact `make verilog ...` that builds this configuration (only the knobs that change the circuit)."""
+    return "make verilog " + " ".join(f"{k}={config[k]}" for k in KNOBS if k in config and KNOBS[k].cost)

@@ -1,0 +1,62 @@
+"""Stand-in for `java ... rtaccel.cli.Serve` in the dse.explore tests (no JVM): the same JSON-lines protocol,
+answers that are simple functions of the flags, so the tests can predict every figure and every front.
+
+cachesim: predicted rays/s = 1e5 * TUS * (1 + NODE_CACHE / 256); DRAM bytes per ray = 1000 / (1 + NODE_CACHE / 64).
+simulate: rays/s = 0.8 x the prediction. area: refused like a build without FIDELITY=model unless
+FAKE_SERVE_AREA=1; then lut = 1000 * TUS + NODE_CACHE, bram36 = NODE_CACHE / 64, fits when lut <= 3000.
+FAKE_SERVE_REFUSE_TUS=n: every run with TUS=n is refused (status 2); FAKE_SERVE_CHECK_FAIL_TUS=n: its RTL run
+fails a check (status 3); FAKE_SERVE_CRASH_TUS=n: the server process dies on its cachesim request.
+FAKE_SERVE_SLEEP=s: each answer takes s seconds (so a test can kill a sweep in the middle).
+Every request is appended to $FAKE_SERVE_LOG (one JSON line) so the tests see which runs were made.
+"""
+import json
+import os
+import sys
+import time
+
+
+def answer(cmd, a):
+    tus, nc = int(a.get("tus", 32)), int(a.get("node-cache", 8192))
+    env = os.environ.get
+    if env("FAKE_SERVE_REFUSE_TUS") == str(tus):
+        return 2, None, f"TUS={tus} is refused by this fake"
+    pred = 1e5 * tus * (1 + nc / 256)
+    if cmd == "cachesim":
+        if env("FAKE_SERVE_CRASH_TUS") == str(tus):
+            sys.exit(134)
+        bpr = 1000 / (1 + nc / 64)
+        return 0, {"scene": a["scene-label"], "rtaccel": "fake-1", "config": a.get("config", "fit"), "tus": tus, "rays": 100,
+                   "node_accesses": 1000, "node_bytes_per_ray_nocache": 1280.0, "predicted_rays_per_s": pred,
+                   "bandwidth_bound_rays_per_s": 2 * pred, "dram_bytes_per_ray": bpr,
+                   "node_cache": {"entries": nc, "miss_rate": 1 / (1 + nc / 64)}, "prim_cache": {"entries": 0, "miss_rate": 1.0}}, None
+    if cmd == "area":
+        if env("FAKE_SERVE_AREA") != "1":
+            return 2, None, "FIDELITY=model is not available: only FIDELITY=yosys (a real synthesis) is built so far"
+        lut = 1000 * tus + nc
+        j = {"config": a.get("config"), "board": a.get("board"), "family": "xc7", "fidelity": "model", "lut": lut, "lutram": 0,
+             "ff": 2 * lut, "dsp": 4 * tus, "bram36": nc / 64, "fits": lut <= 3000, "first_overflow": None, "units": {}}
+        return (0 if j["fits"] else 3), j, (None if j["fits"] else f"check failed: does not fit: lut {lut} > 3000")
+    if cmd == "simulate":
+        j = {"rays": 100, "rays_per_s_at_clock": 0.8 * pred, "dram_bytes_per_ray": 1000 / (1 + nc / 64),
+             "node_cache": {"miss_rate": 1 / (1 + nc / 64)}, "ok": True, "failures": []}
+        if env("FAKE_SERVE_CHECK_FAIL_TUS") == str(tus):
+            j.update(ok=False, failures=["mismatch_vs_model"])
+            return 3, j, "check failed: mismatch_vs_model"
+        return 0, j, None
+    return 2, None, f"unknown cmd '{cmd}'"
+
+
+def main():
+    for line in sys.stdin:
+        req = json.loads(line)
+        args = req["args"]
+        a = {k[2:]: v for k, v in zip(args[0::2], args[1::2])}
+        with open(os.environ["FAKE_SERVE_LOG"], "a") as f:
+            f.write(json.dumps([req["cmd"], a]) + "\n")
+        time.sleep(float(os.environ.get("FAKE_SERVE_SLEEP", "0")))
+        status, result, error = answer(req["cmd"], a)
+        print(json.dumps({"status": status, "result": result, "error": error, "wall_s": 0.001}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
