@@ -31,10 +31,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area lint simulate soak regress paper-nocache paper-caches bench-caches
+        yosys verilog area area-fp lint simulate soak regress paper-nocache paper-caches bench-caches
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | regress | paper-nocache | paper-caches | bench-caches   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | area-fp | regress | paper-nocache | paper-caches | bench-caches   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -157,6 +157,11 @@ verilog: deps
 area: deps yosys
 	@$(JAVA) rtaccel.cli.Area --config $(VCONFIG) $(PLATFORM_KNOBS) \
 	  $(if $(FIDELITY),--fidelity $(FIDELITY)) $(if $(UNIT),--unit $(UNIT)) $(if $(OUT),--out $(OUT))
+
+# Each fp32 operation of src/main/scala/rtaccel/fp alone between flip-flops for BOARD's family (docs/area.md):
+# table on stderr, JSON last line; cached like make area.
+area-fp: deps yosys
+	@$(JAVA) rtaccel.cli.AreaFp $(if $(BOARD),--board $(BOARD)) $(if $(OPS),--ops $(OPS)) $(if $(OUT),--out $(OUT))
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.
 LINT_WAIVERS = tools/lint.vlt

@@ -47,6 +47,9 @@ object Flags {
   val verilog: Seq[Flag] = platform :+ f("out", "output folder")
   val area: Seq[Flag] = verilog ++ Seq(f("fidelity", "yosys"),
     f("unit", "one module to synthesize instead of the board top (UNIT=)"), f("cache", "synthesis cache folder"))
+  val areaFp: Seq[Flag] = model.filter(fl => fl.name == "board" || fl.name == "catalog") ++ Seq(
+    f("ops", "fp32 operations to synthesize, comma-separated (OPS=; default all)"), f("out", "output folder"),
+    f("cache", "synthesis cache folder"))
 
   /** Levenshtein distance, for the "did you mean" of a misspelled flag. */
   def distance(a: String, b: String): Int = {

@@ -1,0 +1,72 @@
+package rtaccel.area
+
+import java.nio.file.{Files, Path, StandardCopyOption}
+import java.security.MessageDigest
+import scala.collection.mutable
+
+/** One cached Yosys synthesis of a circuit: resources rolled up per module, instance counts under the top and
+  * the timing proxy per module. `levels` and `ltpCells` are per instance of a module (its own logic between
+  * its cuts, see [[Levels]]).
+  */
+final case class Synthesis(top: String, family: String, version: String, cache: Path, cached: Boolean,
+                           resources: Map[String, Resources], instances: Map[String, Long],
+                           levels: Map[String, Int], ltpCells: Map[String, Int], unknown: Set[String]) {
+  def total: Resources = resources(top)
+  /** The module under the top with the deepest path (ties: the name first in order) and its LUT levels. */
+  def deepest: (String, Int) = instances.keys.toSeq.sorted.map(m => m -> levels.getOrElse(m, 0)).maxBy(_._2)
+}
+
+object Synthesis {
+  /** Synthesizes `files` with `top` for `family` unless `cacheRoot` holds the result already. The key hashes the
+    * Verilog, the Yosys version, the family, the top and the recipe, so a changed script never reuses old results.
+    */
+  def run(files: Seq[Path], top: String, family: String, cacheRoot: Path, what: String, say: String => Unit,
+          rtaccelVersion: String): Synthesis = {
+    val version = Yosys.version()
+    val modules = files.map(_.getFileName.toString.replaceAll("""\.s?v$""", ""))
+    val recipe = Yosys.recipe(family, top, modules)
+    val dir = cacheRoot.resolve(hash(files, s"$version $family $top\n$recipe"))
+    val stat = dir.resolve(Yosys.statFile)
+    val cached = Files.isRegularFile(stat)
+    if (!cached) {
+      val work = dir.resolve("work")
+      Files.createDirectories(work)
+      say(s"synthesizing $what for $family with Yosys $version (minutes for the whole platform)")
+      Yosys.synthesize(files, recipe, work, what, say)
+      val levels = Levels.ofNetlist(work.resolve(Yosys.netlistFile))
+      Files.writeString(work.resolve(levelsFile), ujson.write(ujson.Obj("about" -> ("LUT levels of the deepest combinational " +
+        "path per module (rtaccel.area.Levels)"), "top" -> top, "family" -> family, "yosys_version" -> version,
+        "rtaccel" -> rtaccelVersion, "modules" -> ujson.Obj.from(levels.toSeq.sorted.map { case (m, n) => m -> ujson.Num(n) })), indent = 2))
+      // the netlist is large and everything it was kept for is in levels.json
+      Files.delete(work.resolve(Yosys.netlistFile))
+      // stat.json last: its presence is what marks a complete result
+      for (f <- Seq(Yosys.ltpFile, levelsFile, Yosys.logFile, Yosys.statFile))
+        Files.move(work.resolve(f), dir.resolve(f), StandardCopyOption.REPLACE_EXISTING)
+      Files.delete(work)
+    } else say(s"cached synthesis $dir")
+    val unknown = mutable.Set[String]()
+    val mods = Yosys.modules(stat)
+    val per = Yosys.rollUp(mods, unknown)
+    if (!per.contains(top)) throw new rtaccel.io.InputError(s"Yosys reported no module $top (see ${dir.resolve(Yosys.logFile)})")
+    val levels = ujson.read(Files.readString(dir.resolve(levelsFile)))("modules").obj.map { case (m, n) => m -> n.num.toInt }.toMap
+    val ltp = Levels.parseLtp(Files.readString(dir.resolve(Yosys.ltpFile)))
+    Synthesis(top, family, version, dir, cached, per, countInstances(mods, top), levels, ltp, unknown.toSet)
+  }
+
+  val levelsFile = "levels.json"
+
+  /** How many times each module is instantiated in the design under `top` (top itself once). */
+  def countInstances(mods: Map[String, Map[String, Long]], top: String): Map[String, Long] = {
+    val n = mutable.Map[String, Long]().withDefaultValue(0L)
+    def walk(m: String, k: Long): Unit = { n(m) += k; mods.getOrElse(m, Map.empty).foreach { case (t, c) => if (mods.contains(t)) walk(t, k * c) } }
+    walk(top, 1)
+    n.toMap
+  }
+
+  private def hash(files: Seq[Path], extra: String): String = {
+    val md = MessageDigest.getInstance("SHA-256")
+    for (f <- files.sortBy(_.getFileName.toString)) { md.update(f.getFileName.toString.getBytes); md.update(Files.readAllBytes(f)) }
+    md.update(extra.getBytes)
+    md.digest().take(12).map("%02x".format(_)).mkString
+  }
+}
