@@ -1,12 +1,13 @@
 package rtaccel.cli
 
-import java.nio.file.{Files, Path, Paths}
+import java.nio.file.Paths
 import rtaccel.area.{Board, Boards, Resources, Synthesis, Timing}
 import rtaccel.io.InputError
 
 /** make area: FPGA resources of a configuration from a Yosys synthesis for the board's family, per unit and in
-  * total, and whether it fits the board (exit 3 when it does not). Results are cached per circuit (hash of the
-  * emitted Verilog, the Yosys version, the family and the top), since the whole platform takes minutes.
+  * total, and whether it fits the board (exit 3 when it does not). Results are cached per circuit (area.Synthesis:
+  * hash of the emitted Verilog, the Yosys version, the family, the top and the script), since the whole platform
+  * takes minutes. The deepest path in LUT levels is reported beside the resources (a timing proxy, docs/area.md).
   * UNIT=<module> synthesizes one module of the design (e.g. BoxPipe) instead of the board top.
   */
 object Area {
