@@ -1,6 +1,6 @@
 package rtaccel.area
 
-import java.nio.file.{Files, Path}
+import java.nio.file.Path
 import scala.collection.mutable
 
 /** The timing proxy: the deepest combinational path of each module, in LUT levels, from the synthesized
@@ -17,7 +17,8 @@ object Levels {
 
   /** LUT levels of the deepest path of every (non-blackbox) module in a `write_json` netlist. */
   def ofNetlist(netlist: Path): Map[String, Int] = {
-    val j = ujson.read(Files.readString(netlist))
+    // read as a stream of bytes: the whole platform's netlist is hundreds of MB
+    val j = ujson.read(ujson.Readable.fromPath(netlist))
     val mods = j("modules").obj
     val own = mods.collect { case (n, m) if !isBox(m) => Yosys.clean(n) }.toSet
     mods.collect { case (n, m) if !isBox(m) => Yosys.clean(n) -> deepest(m, own) }.toMap
