@@ -31,10 +31,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse
+        yosys verilog area area-fp cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -167,6 +167,11 @@ cost-model: deps yosys
 # Largest TU count that fits BOARD (cost model), confirmed by one synthesis (CONFIRM=0 skips it).
 max-tus: deps yosys
 	@$(JAVA) rtaccel.cli.MaxTus --config $(VCONFIG) $(PLATFORM_KNOBS) $(if $(CONFIRM),--confirm $(CONFIRM)) $(if $(OUT),--out $(OUT))
+
+# Each fp32 operation of src/main/scala/rtaccel/fp alone between flip-flops for BOARD's family (docs/area.md):
+# table on stderr, JSON last line; cached like make area.
+area-fp: deps yosys
+	@$(JAVA) rtaccel.cli.AreaFp $(if $(BOARD),--board $(BOARD)) $(if $(OPS),--ops $(OPS)) $(if $(OUT),--out $(OUT))
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.
 LINT_WAIVERS = tools/lint.vlt

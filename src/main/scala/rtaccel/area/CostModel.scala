@@ -69,7 +69,7 @@ object CostModel {
     else f
 
   /** A synthesis split into units: each unit's resources (all its instances) and instance count. */
-  def decompose(s: Synthesized): Map[String, (Resources, Long)] = {
+  def decompose(s: Synthesis): Map[String, (Resources, Long)] = {
     val total = scala.collection.mutable.Map[String, Resources]().withDefaultValue(Resources())
     val count = scala.collection.mutable.Map[String, Long]().withDefaultValue(0L)
     val unknown = scala.collection.mutable.Set[String]()

@@ -1,51 +1,78 @@
 package rtaccel.area
 
-import java.nio.file.{Files, Path}
+import java.nio.file.{Files, Path, StandardCopyOption}
 import java.security.MessageDigest
-import rtaccel.config.PlatformParams
-import rtaccel.io.InputError
+import scala.collection.mutable
 
-/** One Yosys synthesis of a configuration's Verilog (or of one module of it), cached per circuit: the hash of
-  * the emitted Verilog, the Yosys version, the family and the top names a folder of `cacheRoot` holding
-  * Yosys' statistics, so a rerun of the same circuit answers at once.
+/** One cached Yosys synthesis of a circuit: resources rolled up per module, instance counts under the top and
+  * the timing proxy per module. `levels` and `ltpCells` are per instance of a module (its own logic between
+  * its cuts, see [[Levels]]).
   */
-final case class Synthesized(top: String, mods: Map[String, Map[String, Long]], per: Map[String, Resources],
-                             instances: Map[String, Long], unknown: Set[String], cached: Boolean, cacheDir: Path, yosysVersion: String) {
-  def total: Resources = per(top)
+final case class Synthesis(top: String, family: String, version: String, cache: Path, cached: Boolean,
+                           resources: Map[String, Resources], instances: Map[String, Long],
+                           levels: Map[String, Int], ltpCells: Map[String, Int], unknown: Set[String],
+                           mods: Map[String, Map[String, Long]]) {
+  def total: Resources = resources(top)
+  /** The module under the top with the deepest path (ties: the name first in order) and its LUT levels. */
+  def deepest: (String, Int) = instances.keys.toSeq.sorted.map(m => m -> levels.getOrElse(m, 0)).maxBy(_._2)
 }
 
 object Synthesis {
-  /** Thrown instead of synthesizing when only cached results are wanted. */
+  /** Synthesizes `files` with `top` for `family` unless `cacheRoot` holds the result already. The key hashes the
+    * Verilog, the Yosys version, the family, the top and the recipe, so a changed script never reuses old results.
+    */
+  /** Thrown instead of synthesizing when only cached results are wanted (make cost-model CACHED_ONLY=1). */
   final class NotCached(what: String) extends Exception(what)
 
-  def run(p: PlatformParams, family: String, top: String, rtlDir: Path, cacheRoot: Path, log: String => Unit,
-          cachedOnly: Boolean = false): Synthesized = {
+  /** The board top of `p` (or its module `top`), emitted into `rtlDir` and synthesized (or found in the cache). */
+  def of(p: rtaccel.config.PlatformParams, family: String, top: String, rtlDir: Path, cacheRoot: Path, say: String => Unit,
+         cachedOnly: Boolean = false): Synthesis = {
     val files = rtaccel.cli.EmitVerilog.emit(p, rtlDir).filter(_.toString.endsWith(".sv"))
     val modulesInRtl = files.map(_.getFileName.toString.stripSuffix(".sv")).toSet
     if (!modulesInRtl(top))
-      throw new InputError(s"UNIT=$top is not a module of config '${p.name}'; choose one of ${modulesInRtl.toSeq.sorted.mkString(", ")}")
+      throw new rtaccel.io.InputError(s"UNIT=$top is not a module of config '${p.name}'; choose one of ${modulesInRtl.toSeq.sorted.mkString(", ")}")
+    run(files, top, family, cacheRoot, s"$top of '${p.name}'", say, rtaccel.cli.Cli.version, cachedOnly)
+  }
+
+  def run(files: Seq[Path], top: String, family: String, cacheRoot: Path, what: String, say: String => Unit,
+          rtaccelVersion: String, cachedOnly: Boolean = false): Synthesis = {
     val version = Yosys.version()
-    val cache = cacheRoot.resolve(hash(files, s"$version $family $top"))
-    val stat = cache.resolve("stat.json")
+    val modules = files.map(_.getFileName.toString.replaceAll("""\.s?v$""", ""))
+    val recipe = Yosys.recipe(family, top, modules)
+    val dir = cacheRoot.resolve(hash(files, s"$version $family $top\n$recipe"))
+    val stat = dir.resolve(Yosys.statFile)
     val cached = Files.isRegularFile(stat)
-    if (!cached && cachedOnly) throw new NotCached(s"$top of '${p.name}' for $family")
+    if (!cached && cachedOnly) throw new NotCached(s"$what for $family")
     if (!cached) {
-      Files.createDirectories(cache)
-      log(s"synthesizing $top of '${p.name}' for $family with Yosys $version (minutes for the whole platform)")
-      val tmp = cache.resolve("stat.json.tmp")
-      Yosys.synthesize(files, top, family, cache.resolve("yosys.log"), tmp, line => log(line.take(120)))
-      Files.move(tmp, stat)
-    } else log(s"cached synthesis $cache")
-    val unknown = scala.collection.mutable.Set[String]()
+      val work = dir.resolve("work")
+      Files.createDirectories(work)
+      say(s"synthesizing $what for $family with Yosys $version (minutes for the whole platform)")
+      Yosys.synthesize(files, recipe, work, what, say)
+      val levels = Levels.ofNetlist(work.resolve(Yosys.netlistFile))
+      Files.writeString(work.resolve(levelsFile), ujson.write(ujson.Obj("about" -> ("LUT levels of the deepest combinational " +
+        "path per module (rtaccel.area.Levels)"), "top" -> top, "family" -> family, "yosys_version" -> version,
+        "rtaccel" -> rtaccelVersion, "modules" -> ujson.Obj.from(levels.toSeq.sorted.map { case (m, n) => m -> ujson.Num(n) })), indent = 2))
+      // the netlist is large and everything it was kept for is in levels.json
+      Files.delete(work.resolve(Yosys.netlistFile))
+      // stat.json last: its presence is what marks a complete result
+      for (f <- Seq(Yosys.ltpFile, levelsFile, Yosys.logFile, Yosys.statFile))
+        Files.move(work.resolve(f), dir.resolve(f), StandardCopyOption.REPLACE_EXISTING)
+      Files.delete(work)
+    } else say(s"cached synthesis $dir")
+    val unknown = mutable.Set[String]()
     val mods = Yosys.modules(stat)
     val per = Yosys.rollUp(mods, unknown)
-    if (!per.contains(top)) throw new InputError(s"Yosys reported no module $top (see ${cache.resolve("yosys.log")})")
-    Synthesized(top, mods, per, countInstances(mods, top), unknown.toSet, cached, cache, version)
+    if (!per.contains(top)) throw new rtaccel.io.InputError(s"Yosys reported no module $top (see ${dir.resolve(Yosys.logFile)})")
+    val levels = ujson.read(Files.readString(dir.resolve(levelsFile)))("modules").obj.map { case (m, n) => m -> n.num.toInt }.toMap
+    val ltp = Levels.parseLtp(Files.readString(dir.resolve(Yosys.ltpFile)))
+    Synthesis(top, family, version, dir, cached, per, countInstances(mods, top), levels, ltp, unknown.toSet, mods)
   }
+
+  val levelsFile = "levels.json"
 
   /** How many times each module is instantiated in the design under `top` (top itself once). */
   def countInstances(mods: Map[String, Map[String, Long]], top: String): Map[String, Long] = {
-    val n = scala.collection.mutable.Map[String, Long]().withDefaultValue(0L)
+    val n = mutable.Map[String, Long]().withDefaultValue(0L)
     def walk(m: String, k: Long): Unit = { n(m) += k; mods.getOrElse(m, Map.empty).foreach { case (t, c) => if (mods.contains(t)) walk(t, k * c) } }
     walk(top, 1)
     n.toMap

@@ -17,14 +17,36 @@ object Yosys {
     out.split("\\s+").lift(1).getOrElse(out)
   }
 
-  /** Runs `synth_xilinx -family <family> -top <top>` and writes `stat -json` to statJson; Yosys' log goes to
-    * logFile, and every pass it starts is reported to `progress` (a synthesis of the whole platform takes minutes).
+  /** Names of the files a synthesis leaves in its folder. */
+  val statFile = "stat.json"
+  val ltpFile = "ltp.txt"
+  val netlistFile = "netlist.json"
+  val logFile = "yosys.log"
+
+  /** Cell types where a combinational path starts and ends (flip-flops, latches, block RAM, DSP slices, LUT RAM
+    * and shift registers, whose reads we take as registered); `Levels` cuts at the same types.
     */
-  def synthesize(files: Seq[Path], top: String, family: String, logFile: Path, statJson: Path, progress: String => Unit): Unit = {
-    val script = s"read_verilog -sv ${files.map(_.toString).mkString(" ")}; synth_xilinx -family $family -top $top; " +
-      s"tee -q -o $statJson stat -json"
+  val pathCuts: Seq[String] = Seq("FD*", "LD*", "RAMB*", "DSP48*", "RAM16X*", "RAM32X*", "RAM64X*", "RAM128X*",
+    "RAM256X*", "RAM512X*", "RAM32M*", "RAM64M*", "SRL*")
+
+  /** Everything after read_verilog, run in the result folder; part of the cache key, so a changed recipe never
+    * reuses an old result. ltp sees each module alone: an instance of a submodule is one cell of its parent and
+    * cut like a flip-flop (its own depth is its module's entry).
+    */
+  def recipe(family: String, top: String, modules: Seq[String]): String = {
+    val cuts = (pathCuts ++ modules.sorted.distinct).map("t:" + _).mkString(" ")
+    s"synth_xilinx -family $family -top $top; tee -q -o $statFile stat -json; " +
+      s"tee -q -o $ltpFile ltp -noff $cuts %% %n; write_json $netlistFile"
+  }
+
+  /** Runs `read_verilog` on `files` and then `recipe` in `dir` (stat, ltp and netlist files land there); Yosys'
+    * log goes to yosys.log, and every pass it starts is reported to `progress` (the whole platform takes minutes).
+    */
+  def synthesize(files: Seq[Path], recipe: String, dir: Path, what: String, progress: String => Unit): Unit = {
+    val script = s"read_verilog -sv ${files.map(_.toAbsolutePath.toString).mkString(" ")}; $recipe"
+    val log = dir.toAbsolutePath.resolve(logFile)
     // warnings stay in the log; errors are shown as they come
-    val proc = Process(Seq("yosys", "-q", "-l", logFile.toString, "-p", script)).run(ProcessLogger(
+    val proc = Process(Seq("yosys", "-q", "-l", log.toString, "-p", script), dir.toFile).run(ProcessLogger(
       l => if (l.contains("ERROR")) progress(l), l => if (l.contains("ERROR")) progress(l)))
     // heartbeat: the pass Yosys is in, from its log, every 30 s (-q keeps the terminal otherwise quiet)
     val t0 = System.nanoTime(); var beat = t0
@@ -32,13 +54,13 @@ object Yosys {
       Thread.sleep(500)
       if (System.nanoTime() - beat > 30e9) {
         beat = System.nanoTime()
-        progress(f"${(beat - t0) / 1e9}%.0f s, ${currentPass(logFile)}")
+        progress(f"${(beat - t0) / 1e9}%.0f s, ${currentPass(log)}")
       }
     }
     val code = proc.exitValue()
-    if (code != 0 || !Files.isRegularFile(statJson)) {
-      val tail = if (Files.exists(logFile)) Files.readAllLines(logFile).toArray.takeRight(5).mkString(" | ") else ""
-      throw new InputError(s"yosys failed (status $code) on $top for $family: $tail (log: $logFile)")
+    if (code != 0 || !Files.isRegularFile(dir.resolve(statFile)) || !Files.isRegularFile(dir.resolve(netlistFile))) {
+      val tail = if (Files.exists(log)) Files.readAllLines(log).toArray.takeRight(5).mkString(" | ") else ""
+      throw new InputError(s"yosys failed (status $code) on $what: $tail (log: $log)")
     }
   }
 
@@ -66,7 +88,7 @@ object Yosys {
     }.toMap
   }
 
-  private def clean(name: String): String = name.stripPrefix("\\")
+  private[area] def clean(name: String): String = name.stripPrefix("\\")
 
   /** Resources of `top` and of every module it instantiates, rolled up through the hierarchy. */
   def rollUp(mods: Map[String, Map[String, Long]], unknown: scala.collection.mutable.Set[String]): Map[String, Resources] = {

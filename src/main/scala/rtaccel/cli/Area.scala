@@ -1,13 +1,14 @@
 package rtaccel.cli
 
 import java.nio.file.Paths
-import rtaccel.area.{Board, Boards, CostModel, Resources, Synthesis}
+import rtaccel.area.{Board, Boards, CostModel, Resources, Synthesis, Timing}
 import rtaccel.io.InputError
 
 /** make area: FPGA resources of a configuration from a Yosys synthesis for the board's family, per unit and in
   * total, and whether it fits the board (exit 3 when it does not). Results are cached per circuit (hash of the
   * emitted Verilog, the Yosys version, the family and the top), since the whole platform takes minutes.
   * UNIT=<module> synthesizes one module of the design (e.g. BoxPipe) instead of the board top.
+  * The deepest path in LUT levels is reported beside the resources (a timing proxy, docs/area.md).
   * FIDELITY=model answers from the fitted cost model (area.CostModel, boards/cost-model.json) without a synthesis.
   */
 object Area {
@@ -41,17 +42,24 @@ object Area {
 
   /** A real synthesis (cached per circuit), every module of the hierarchy in `units`. */
   private def yosysJson(a: Args, p: rtaccel.config.PlatformParams, board: Board, out: java.nio.file.Path): ujson.Obj = {
-    val s = Synthesis.run(p, board.family, a.get("unit", "RtAccelTop"), out.resolve("rtl"), Paths.get(a.get("cache", "build/area-cache")),
-      line => System.err.println(s"[area] $line"))
+    val s = Synthesis.of(p, board.family, a.get("unit", "RtAccelTop"), out.resolve("rtl"), Paths.get(a.get("cache", "build/area-cache")),
+      line => System.err.println(s"[area] ${line.take(120)}"))
     val total = s.total
-    printTable(p.name, board, s.top, s.per, s.instances)
+    val (deepUnit, deepLevels) = s.deepest
+    val timing = Timing.forFamily(board.family)
+    printTable(p.name, board, s.top, s.resources, s.instances, s.levels)
+    System.err.println(f"  deepest path: $deepLevels LUT levels in $deepUnit, ~${timing.fmaxMhz(deepLevels)}%.0f MHz (a proxy: no placement or routing)")
     val j = header(p, board, "yosys", s.top)
     j("lut") = total.lut.toDouble; j("lutram") = total.lutram.toDouble; j("ff") = total.ff.toDouble; j("dsp") = total.dsp.toDouble
     j("bram36") = total.bram36; j("carry") = total.carry.toDouble
-    j("units") = ujson.Obj.from(s.instances.toSeq.sortBy(_._1).map { case (m, n) => m -> { val o = s.per(m).json; o("instances") = n.toDouble; o } })
-    j("lut_levels") = ujson.Null // the timing proxy is not built yet: left empty, never invented
+    j("units") = ujson.Obj.from(s.instances.toSeq.sortBy(_._1).map { case (m, n) =>
+      m -> { val o = s.resources(m).json; o("instances") = n.toDouble; o("lut_levels") = s.levels.getOrElse(m, 0).toDouble
+        o("ltp_cells") = s.ltpCells.getOrElse(m, 0).toDouble; o } })
+    // a proxy (no placement, routing or retiming; docs/area.md): the deepest unit and a rough clock from it
+    j("lut_levels") = deepLevels.toDouble; j("lut_levels_unit") = deepUnit; j("fmax_mhz_proxy") = timing.fmaxMhz(deepLevels)
+    j("fmax_rule") = timing.rule
     j("unclassified_cells") = ujson.Arr.from(s.unknown.toSeq.sorted.map(ujson.Str(_)))
-    j("yosys_version") = s.yosysVersion; j("cached") = s.cached; j("cache") = s.cacheDir.toString
+    j("yosys_version") = s.version; j("cached") = s.cached; j("cache") = s.cache.toString
     j
   }
 
@@ -83,13 +91,14 @@ object Area {
   def fits(j: ujson.Obj, b: Board): Option[(String, Double, Long)] =
     used(j).zip(b.capacities).collectFirst { case ((name, u), (_, have)) if u > have => (name, u, have) }
 
-  private def printTable(cfg: String, b: Board, top: String, per: Map[String, Resources], inst: Map[String, Long]): Unit = {
+  private def printTable(cfg: String, b: Board, top: String, per: Map[String, Resources], inst: Map[String, Long],
+                         levels: Map[String, Int]): Unit = {
     val e = Console.err
     e.println(f"[area] $cfg ($top) on ${b.name} (${b.part}, ${b.family}):")
-    e.println(f"  ${"unit"}%-28s ${"x"}%5s ${"LUT"}%9s ${"LUTRAM"}%7s ${"FF"}%9s ${"DSP"}%6s ${"BRAM36"}%7s")
+    e.println(f"  ${"unit"}%-28s ${"x"}%5s ${"LUT"}%9s ${"LUTRAM"}%7s ${"FF"}%9s ${"DSP"}%6s ${"BRAM36"}%7s ${"levels"}%6s")
     for ((m, n) <- inst.toSeq.sortBy { case (m, n) => -(per(m).lut * n) }) {
       val r = per(m)
-      e.println(f"  $m%-28s $n%5d ${r.lut}%9d ${r.lutram}%7d ${r.ff}%9d ${r.dsp}%6d ${r.bram36}%7.1f")
+      e.println(f"  $m%-28s $n%5d ${r.lut}%9d ${r.lutram}%7d ${r.ff}%9d ${r.dsp}%6d ${r.bram36}%7.1f ${levels.getOrElse(m, 0)}%6d")
     }
     e.println(f"  ${"board capacity"}%-28s ${""}%5s ${b.lut}%9d ${""}%7s ${b.ff}%9d ${b.dsp}%6d ${b.bram36}%7d")
   }

@@ -2,7 +2,7 @@ package rtaccel.cli
 
 import java.nio.file.{Files, Paths}
 import org.apache.commons.math3.linear.{Array2DRowRealMatrix, ArrayRealVector, SingularValueDecomposition}
-import rtaccel.area.{Boards, CostModel, Synthesis, Synthesized}
+import rtaccel.area.{Boards, CostModel, Synthesis}
 import rtaccel.config.PlatformParams
 import rtaccel.io.InputError
 
@@ -41,17 +41,17 @@ object CostFit {
     var done = 0
     // --cached-only 1: refit from the syntheses already in the cache, leaving out the points that are not
     val cachedOnly = a.get("cached-only", "0") == "1"
-    def synthOpt(pt: Point): Option[Synthesized] = {
+    def synthOpt(pt: Point): Option[Synthesis] = {
       done += 1
       System.err.println(f"[cost-model] $done/${all.length} ${pt.name} (${pt.top}, ${pt.family})")
-      try Some(Synthesis.run(pt.p, pt.family, pt.top, rtl, cache, line => System.err.println(s"[cost-model]   $line"), cachedOnly))
+      try Some(Synthesis.of(pt.p, pt.family, pt.top, rtl, cache, line => System.err.println(s"[cost-model]   $line"), cachedOnly))
       catch { case e: Synthesis.NotCached => System.err.println(s"[cost-model]   not cached, left out: ${e.getMessage}"); None }
     }
-    def synth(pt: Point): Synthesized = synthOpt(pt).get
+    def synth(pt: Point): Synthesis = synthOpt(pt).get
     val trained = train.flatMap(pt => synthOpt(pt).map(pt -> _))
     if (trained.isEmpty) throw new InputError("no training synthesis available; run make cost-model without --cached-only")
     val coef = fit(trained)
-    val base = CostModel.Fitted(coef, family, trained.head._2.yosysVersion, Map(family -> CostModel.resources.map(_ -> 1.0).toMap), ujson.Obj())
+    val base = CostModel.Fitted(coef, family, trained.head._2.version, Map(family -> CostModel.resources.map(_ -> 1.0).toMap), ujson.Obj())
 
     // validation: whole configurations the fit has not seen, and the model's instance counts against the hierarchy's
     val rows = validate.flatMap(pt => synthOpt(pt).map(pt -> _)).map { case (pt, s) =>
@@ -104,7 +104,7 @@ object CostFit {
   /** Least squares per unit and resource over the training syntheses that contain the unit. The SVD solve is
     * the minimum-norm solution, so a feature the training set never varies gets no weight instead of failing.
     */
-  def fit(trained: Seq[(Point, Synthesized)]): Map[String, Map[String, Map[String, Double]]] = {
+  def fit(trained: Seq[(Point, Synthesis)]): Map[String, Map[String, Map[String, Double]]] = {
     val samples = trained.flatMap { case (pt, s) =>
       CostModel.decompose(s).toSeq.flatMap { case (u, (r, n)) => CostModel.units.find(_.name == u).map(un => (un, pt.p, r, n)) }
     }

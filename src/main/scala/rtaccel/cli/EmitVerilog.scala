@@ -22,7 +22,10 @@ object EmitVerilog {
   }
 
   /** SystemVerilog of the board top of `p`, one file per module in `out` (old .sv files removed); the files. */
-  def emit(p: rtaccel.config.PlatformParams, out: java.nio.file.Path): Seq[java.nio.file.Path] = {
+  def emit(p: rtaccel.config.PlatformParams, out: java.nio.file.Path): Seq[java.nio.file.Path] = emitModule(new RtAccelTop(p), out)
+
+  /** SystemVerilog of any module (make area-fp's probes as well as the board top), as `emit` writes it. */
+  def emitModule(gen: => chisel3.RawModule, out: java.nio.file.Path): Seq[java.nio.file.Path] = {
     Files.createDirectories(out)
     // a previous configuration's modules must not linger next to this one's
     Files.list(out).toArray.map(_.asInstanceOf[java.nio.file.Path]).filter(f => f.toString.endsWith(".sv")).foreach(Files.delete)
@@ -30,7 +33,7 @@ object EmitVerilog {
     new _root_.circt.stage.ChiselStage().execute(
       Array("--target-dir", out.toString, "--target", "systemverilog", "--split-verilog") ++
         (if (sys.env.contains("RTACCEL_DEBUG")) Array("--full-stacktrace") else Array[String]()),
-      Seq(chisel3.stage.ChiselGeneratorAnnotation(() => new RtAccelTop(p)),
+      Seq(chisel3.stage.ChiselGeneratorAnnotation(() => gen),
         _root_.circt.stage.FirtoolOption("-disable-all-randomization"), _root_.circt.stage.FirtoolOption("-strip-debug-info"),
         // the SystemVerilog subset that Yosys 0.23 reads (no `automatic` locals in always blocks, no packed
         // arrays) and Verilator lints clean: one output for synthesis, lint and vendor tools

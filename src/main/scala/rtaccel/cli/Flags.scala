@@ -52,6 +52,9 @@ object Flags {
   val costFit: Seq[Flag] = Seq(f("calibration", "calibration plan (boards/cost-calibration.json)"), f("out", "fitted model file"),
     f("cache", "synthesis cache folder"), f("catalog", "board catalog file"), f("cached-only", "1: fit from the cached syntheses only, leaving out the others"))
   val maxTus: Seq[Flag] = area ++ Seq(f("confirm", "1 (default) confirms the answer with one real synthesis"), f("max", "largest TU count tried"))
+  val areaFp: Seq[Flag] = model.filter(fl => fl.name == "board" || fl.name == "catalog") ++ Seq(
+    f("ops", "fp32 operations to synthesize, comma-separated (OPS=; default all)"), f("out", "output folder"),
+    f("cache", "synthesis cache folder"))
 
   /** Levenshtein distance, for the "did you mean" of a misspelled flag. */
   def distance(a: String, b: String): Int = {

@@ -35,7 +35,7 @@ object MaxTus {
     val yosys = if (!confirm) None else {
       val p = p0.copy(tus = best)
       val out = Paths.get(a.get("out", s"build/max-tus/${p0.name}-${board.name}"))
-      val s = Synthesis.run(p, board.family, "RtAccelTop", out.resolve("rtl"), Paths.get(a.get("cache", "build/area-cache")),
+      val s = Synthesis.of(p, board.family, "RtAccelTop", out.resolve("rtl"), Paths.get(a.get("cache", "build/area-cache")),
         line => System.err.println(s"[max-tus] $line"))
       val j = ujson.Obj.from(CostModel.resources.map(r => r -> ujson.Num(CostModel.get(s.total, r))))
       Some(j -> Area.fits(j, board))

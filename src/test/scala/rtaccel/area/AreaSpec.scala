@@ -6,7 +6,8 @@ import scala.sys.process._
 import rtaccel.cli.{Area, Cli, Flags}
 
 /** make area on one unit (a cache path: block RAM, seconds of synthesis): the memory maps to block RAM, not
-  * flip-flops; a board too small is refused with both numbers; a bad BOARD lists the catalog.
+  * flip-flops, and the deepest path is named; a board too small is refused with both numbers; a bad BOARD lists
+  * the catalog.
   */
 class AreaSpec extends AnyFunSuite {
   private val hasYosys = (Seq("sh", "-c", "command -v yosys") ! ProcessLogger(_ => ())) == 0
@@ -31,6 +32,10 @@ class AreaSpec extends AnyFunSuite {
       val dataBits = n.toLong * 4 * 257 // 4 beats of 256 bits + their error bit per 128 B node
       assert(j("bram36").num >= dataBits / 36864.0, s"$n entries: ${j("bram36").num} BRAM36 for $dataBits bits")
       assert(j("lut").num > 0 && j("ff").num > 0 && j("fits").bool && j("yosys_version").str.nonEmpty)
+      // the timing proxy: a whole number of LUT levels, in a unit the table names, with a clock from it
+      val (levels, unit) = (j("lut_levels").num, j("lut_levels_unit").str)
+      assert(levels >= 1 && levels.isWhole && j("units")(unit)("lut_levels").num == levels, j.toString)
+      assert(j("units").obj.values.forall(_("lut_levels").num <= levels) && j("fmax_mhz_proxy").num > 0)
     }
     val (ff256, ff1024) = (runs(256)("ff").num, runs(1024)("ff").num)
     assert(ff1024 - ff256 < 32, s"flip-flops grew from $ff256 to $ff1024 with 4x the cache: the memory went to registers")

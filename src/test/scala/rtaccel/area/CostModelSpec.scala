@@ -53,7 +53,8 @@ class CostModelSpec extends AnyFunSuite {
       "TraversalUnit" -> Map("stack" -> 1L, "LUT6" -> 7L, "FDRE" -> 2L),
       "stack" -> Map("RAM64M" -> 1L), "RRArbiter" -> Map("LUT6" -> 100L), "FpDivPipe" -> Map("LUT6" -> 50L, "DSP48E1" -> 1L),
       "Queue8" -> Map("FDRE" -> 4L))
-    val s = Synthesized("RtAccelTop", mods, Map.empty, Synthesis.countInstances(mods, "RtAccelTop"), Set.empty, cached = true, dir, "test")
+    val s = Synthesis("RtAccelTop", "xc5v", "test", dir, cached = true, Map.empty, Synthesis.countInstances(mods, "RtAccelTop"),
+      Map.empty, Map.empty, Set.empty, mods)
     val u = CostModel.decompose(s)
     assert(u("TraversalUnit") == (Resources(lut = 21, lutram = 3, ff = 6), 3L))
     assert(u("TraversalController") == (Resources(lut = 105), 1L)) // its own 5 + the arbiter's 100

@@ -1,0 +1,25 @@
+package rtaccel.area
+
+import java.nio.file.{Files, Path, Paths}
+import rtaccel.io.InputError
+
+/** The levels -> MHz rule of one family (boards/timing.json): a proxy with no placement, routing or retiming. */
+final case class FamilyTiming(family: String, levelNs: Double, overheadNs: Double, capMhz: Double, source: String) {
+  def fmaxMhz(levels: Int): Double = math.min(capMhz, 1000.0 / (overheadNs + levels * levelNs))
+  def rule: String = f"1000 / ($overheadNs%.2f + levels x $levelNs%.2f) ns, at most $capMhz%.0f MHz ($source)"
+}
+
+object Timing {
+  val defaultPath: Path = Paths.get("boards/timing.json")
+
+  def forFamily(family: String, path: Path = defaultPath): FamilyTiming = {
+    if (!Files.isRegularFile(path)) throw new InputError(s"timing rules $path not found; run from the project root")
+    val j = try ujson.read(Files.readString(path)) catch {
+      case e: ujson.ParseException => throw new InputError(s"timing rules $path are not JSON: ${e.getMessage}")
+    }
+    val fams = j("families").obj
+    val t = fams.getOrElse(family, throw new InputError(s"$path has no rule for family '$family'; add one (it has ${fams.keys.toSeq.sorted.mkString(", ")})"))
+    def num(k: String) = t.obj.get(k).map(_.num).getOrElse(throw new InputError(s"family '$family' in $path has no '$k'"))
+    FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""))
+  }
+}
