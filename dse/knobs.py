@@ -6,6 +6,7 @@ refuses (e.g. MPPL over a preset's leaf count field) are refused by the JVM and 
 """
 import json
 import os
+import re
 from dataclasses import dataclass
 
 from scenes.procedural import NAMES as PROCEDURAL_SCENES  # noqa: F401  (re-exported for dse.space)
@@ -40,6 +41,12 @@ def _one_of(names):
     return lambda v: v in names
 
 
+def _box_format(v):
+    # rtaccel.fp.FpFormat.parse and PlatformParams' rule: at most fp32's 8 exponent and 23 fraction bits
+    m = re.fullmatch(r"e(\d+)m(\d+)", v) if isinstance(v, str) else None
+    return v in ("fp32", "fp24", "bf16", "fp16") or (m is not None and 3 <= int(m[1]) <= 8 and 2 <= int(m[2]) <= 23)
+
+
 def _cache(v):
     return v == 0 or (_pow2(v) and v <= 1 << 16)
 
@@ -50,7 +57,8 @@ KNOBS = {
     "M": Knob("--m", "2, 4 or 8", _one_of((2, 4, 8))),
     "MPPL": Knob("--mppl", "an integer 1..16", _int(1, 16)),
     "STACK": Knob("--stack-depth", "an integer 1..4096", _int(1, 4096)),
-    "SHORT_STACK": Knob("--short-stack", "an integer 1..4096", _int(1, 4096)),
+    "SHORT_STACK": Knob("--short-stack", "an integer 1..64", _int(1, 64)),
+    "BOX_FORMAT": Knob("--box-format", "fp32, fp24, bf16, fp16 or e<E>m<M> with E <= 8, M <= 23", _box_format),
     "NODE_CACHE": Knob("--node-cache", "0 or a power of two up to 65536", _cache),
     "NODE_WAYS": Knob("--node-ways", "a power of two 1..64", lambda v: _pow2(v) and v <= 64),
     "NODE_POLICY": Knob("--node-policy", f"one of {', '.join(POLICIES)}", _one_of(POLICIES)),

@@ -70,6 +70,8 @@ object CostFit {
         val there = s1.total; val here = s0.total
         CostModel.resources.map(r => r -> (if (CostModel.get(here, r) == 0) 1.0 else CostModel.get(there, r) / CostModel.get(here, r))).toMap
       }
+      fam -> ratios
+    }.collect { case (fam, ratios) if ratios.nonEmpty => // a family none of whose syntheses is at hand stays uncalibrated
       fam -> CostModel.resources.map(r => r -> ratios.map(_(r)).sum / ratios.length).toMap
     }
     val summary = ujson.Obj.from(CostModel.resources.filter(_ != "carry").map { r =>
@@ -93,7 +95,7 @@ object CostFit {
     val out = Paths.get(a.get("out", CostModel.defaultPath.toString))
     Cli.writeText(out, ujson.write(json, indent = 2) + "\n")
     CostModel.fromJson(json) // what was written reads back
-    println(ujson.write(ujson.Obj("cost_model" -> out.toString, "family" -> family, "trained" -> train.length, "validated" -> validate.length,
+    println(ujson.write(ujson.Obj("cost_model" -> out.toString, "family" -> family, "trained" -> trained.length, "validated" -> rows.length,
       "validation_summary" -> summary, "wall_s" -> (System.nanoTime() - t0) / 1e9)))
   }
 
