@@ -102,6 +102,8 @@ class CostModelSpec extends AnyFunSuite {
     assert(c2 == 3 && !last(o2)("fits").bool && e2.contains("does not fit xc7a100t"), e2)
     val (c3, _, e3) = run(Area.main0, Flags.area, "--config", "small", "--fidelity", "model", "--unit", "BoxPipe")
     assert(c3 == 2 && e3.contains("UNIT= needs FIDELITY=yosys"), e3)
+    val (c4, o4, e4) = run(Area.main0, Flags.area, "--config", "small", "--fidelity", "model", "--box-format", "bf16", "--out", dir.resolve("c").toString)
+    assert(c4 == 2 && o4.isEmpty && e4.contains("BOX_FORMAT=bf16 needs FIDELITY=yosys"), e4)
   }
 
   test("make max-tus (model only): the answer fits, one more does not, a bigger board holds more; none fitting is exit 3") {

@@ -107,11 +107,12 @@ class PlatformSpec extends AnyFunSuite {
       (8, 1, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(), 29)))
     test(s"short stack of $ring with restart at $tus TU(s) with caches: bit-exact, counts equal the model, hits equal the full stack's") {
       val sh = runOne(tus, 4, 4, rays, scene, jitter, node = node, prim = prim, short = ring); val j = sh.json
-      val fo = runOne(tus, 4, 4, rays, scene, jitter, node = node, prim = prim); val full = fo.json
+      // the full stack's side from the model alone (RTL == model is what runOne checks)
+      val (fo, fullNodes) = modelRun(Presets.paper2017.copy(tus = tus)) // caches change no fetch of the model
       def bits(h: rtaccel.scene.Hits, i: Int) = Seq(h.t(i), h.u(i), h.v(i)).map(java.lang.Float.floatToRawIntBits) :+ h.prim(i)
-      for (i <- 0 until rays.count) assert(bits(sh.hits, i) == bits(fo.hits, i), s"ray $i: the short stack's hit differs from the full stack's")
-      info(f"ring $ring: ${j("model_restarts").num}%.0f restarts, ${j("node_requests").num}%.0f node fetches vs ${full("node_requests").num}%.0f with the full stack")
-      assert(j("model_restarts").num > 0 && j("node_requests").num > full("node_requests").num, "the test ring must restart")
+      for (i <- 0 until rays.count) assert(bits(sh.hits, i) == bits(fo, i), s"ray $i: the short stack's hit differs from the full stack's")
+      info(f"ring $ring: ${j("model_restarts").num}%.0f restarts, ${j("node_requests").num}%.0f node fetches vs $fullNodes with the full stack")
+      assert(j("model_restarts").num > 0 && j("node_requests").num > fullNodes, "the test ring must restart")
       assert(j("short_stack").num == ring && j("overflowed").num == 0)
     }
 
@@ -119,11 +120,18 @@ class PlatformSpec extends AnyFunSuite {
   // it can only add traversal work, so the RTL fetches at least the fp32 platform's nodes.
   test("BOX_FORMAT=bf16 at 4 TUs with a DM node cache: bit-exact against the model, no fewer node fetches than fp32") {
     val bf = runOne(4, 4, 4, rays, scene, node = CacheParams(64, 1, CachePolicy.Dm), box = rtaccel.fp.FpFormat.parse("bf16"))
-    val fp = runOne(4, 4, 4, rays, scene, node = CacheParams(64, 1, CachePolicy.Dm))
-    info(f"node fetches: bf16 ${bf.json("node_requests").num}%.0f, fp32 ${fp.json("node_requests").num}%.0f")
-    assert(bf.json("node_requests").num >= fp.json("node_requests").num && bf.json("box_format").str == "bf16")
-    val agree = (0 until rays.count).count(i => bf.hits.prim(i) == fp.hits.prim(i))
+    val (fp, fpNodes) = modelRun(Presets.paper2017.copy(tus = 4)) // fp32 boxes, model only
+    info(f"node fetches: bf16 ${bf.json("node_requests").num}%.0f, fp32 $fpNodes")
+    assert(bf.json("node_requests").num >= fpNodes && bf.json("box_format").str == "bf16")
+    val agree = (0 until rays.count).count(i => bf.hits.prim(i) == fp.prim(i))
     info(s"$agree of ${rays.count} rays hit the same primitive as with fp32 boxes")
+  }
+
+  /** The reference model alone on this spec's scene and rays: its hits and node fetches. */
+  private def modelRun(p: rtaccel.config.PlatformParams): (rtaccel.scene.Hits, Long) = {
+    val b = Cli.build(scene, p, fit = false, stack = Some(64))
+    val st = new rtaccel.model.RayStats
+    (new rtaccel.model.Traversal(rtaccel.bvh.MemoryImage.pack(b.bvh, scene, b.params)).traceAll(rays, stats = st), st.nodeFetches)
   }
 
   test("random memory latency and host backpressure change no result") {
