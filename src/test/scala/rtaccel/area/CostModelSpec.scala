@@ -85,7 +85,7 @@ class CostModelSpec extends AnyFunSuite {
     def t(p: rtaccel.config.PlatformParams) = model.total(p, "xc5v")
     assert(t(base.copy(tus = 16))("lut") < t(base)("lut") && t(base.copy(m = 8))("lut") > t(base)("lut"))
     assert(t(base.copy(nodeCache = base.nodeCache.copy(entries = 2048)))("bram36") < t(base)("bram36"))
-    assert(t(base)("bram36") >= 232 - 1e-9, "the 2^13 DM node cache data alone is 232 RAMB36")
+    assert(math.abs(t(base)("bram36") - 232) < 232 * 0.01, "the 2^13 DM node cache data alone is 232 RAMB36 (synthesized: 232)")
     val units = model.predict(base, "xc5v").map(u => u._1 -> u._3).toMap
     assert(units("TraversalUnit") == 32 && units("FpDivPipe") == 4)
   }
