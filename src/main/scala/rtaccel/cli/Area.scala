@@ -75,9 +75,9 @@ object Area {
     for ((u, r, n) <- units.sortBy(-_._2("lut")) if r.values.exists(_ > 0))
       e.println(f"  $u%-22s $n%5d ${r("lut")}%9.0f ${r("lutram")}%7.0f ${r("ff")}%9.0f ${r("dsp")}%6.0f ${r("bram36")}%7.1f")
     val j = header(p, board, "model", "RtAccelTop")
-    for (r <- CostModel.resources) j(r) = if (r == "bram36") total(r) else math.round(total(r)).toDouble
+    for (r <- CostModel.resources) j(r) = if (r == "bram36") math.rint(total(r) * 10) / 10 else math.round(total(r)).toDouble
     j("units") = ujson.Obj.from(units.map { case (u, r, n) =>
-      u -> ujson.Obj.from(CostModel.resources.map(k => k -> ujson.Num(r(k))) :+ ("instances" -> ujson.Num(n.toDouble))) })
+      u -> ujson.Obj.from(CostModel.resources.map(k => k -> ujson.Num(math.rint(r(k) * 10) / 10)) :+ ("instances" -> ujson.Num(n.toDouble))) })
     j("lut_levels") = ujson.Null // a synthesis property: FIDELITY=yosys reports it
     j("yosys_version") = m.yosysVersion; j("model_family") = m.family
     j("model_error") = m.json.obj.get("validation_summary").getOrElse(ujson.Null)
