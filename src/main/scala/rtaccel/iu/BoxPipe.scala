@@ -50,9 +50,10 @@ class BoxPipe(p: PlatformParams) extends Module {
     val invLo = stage(VecInit(Seq.tabulate(3)(a => Fp.convert(f, bf, in.ray.inv(a), false.B))))
     val invHi = stage(VecInit(Seq.tabulate(3)(a => Fp.convert(f, bf, in.ray.inv(a), true.B))))
     val tmin1 = stage(Fp.convert(f, bf, in.ray.tmin, false.B)); val tmax1 = stage(Fp.convert(f, bf, in.tmax, true.B))
+    val invNeg1 = stage(VecInit(in.ray.inv.map(_(f.width - 1)))) // only the sign of 1/d is needed past stage 1
     val t = stage(VecInit(Seq.tabulate(p.m, 6) { (c, k) =>
       val a = k % 3
-      val invNeg = j1.ray.inv(a)(f.width - 1)
+      val invNeg = invNeg1(a)
       val up = if (k < 3) invNeg else !invNeg // a min plane bounds the entry (down) unless 1/d < 0 swaps the planes
       val d = ab(6 * c + k)
       val useHi = d(bf.width - 1) ^ up

@@ -16,7 +16,9 @@ class VerilogLintSpec extends AnyFunSuite {
       ("paper2017", 4, 8, "--node-cache 8192 --prim-cache 1024 --prim-ways 2"),
       ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru"),
       ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
-      ("small", 4, 1, "--node-cache 64 --node-policy bf")))
+      ("small", 4, 1, "--node-cache 64 --node-policy bf"),
+      // the precision and stack options: outward-rounded boxes, the short stack with restart (1-entry ring too)
+      ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 8, 1, "--box-format fp16 --short-stack 1")))
     test(s"$cfg with M=$m, TUs=$tus${if (caches.isEmpty) "" else s", caches $caches"} emits SystemVerilog that is lint clean") {
       val out = Files.createTempDirectory(s"lint-$cfg")
       val args = Array("--config", cfg, "--m", m.toString, "--tus", tus.toString, "--out", out.toString) ++
