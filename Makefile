@@ -196,7 +196,7 @@ soak: deps build/scenes/cornell.obj
 	  $(MAKE) --no-print-directory simulate SCENE=build/scenes/cornell.obj GOLDEN=$$G CONFIG=$(RUN_CONFIG) \
 	    MEM_JITTER=$(or $(MEM_JITTER),23) HOST_STALL=$(or $(HOST_STALL),20) OUT=build/soak/simulate
 regress: deps
-	RTACCEL_REGRESS=full $(SBT) "testOnly rtaccel.top.PlatformSpec"
+	RTACCEL_REGRESS=full $(SBT) "testOnly rtaccel.top.PlatformSpec rtaccel.iu.IuPipesSpec rtaccel.fp.FpDirectedSpec"
 
 # Paper Figs 12-13 without cache: rays/s and memory utilisation vs TUs (CSV + PNG in build/paper-nocache).
 NOCACHE_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
