@@ -65,7 +65,7 @@ object CacheSim {
     val pred = rtaccel.cache.Throughput.predict(p, sink, rays.count, tus)
     val j = ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
-      "tus" -> tus, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
+      "box_format" -> p.boxFormat.name, "short_stack" -> p.shortStack, "tus" -> tus, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
       "node_accesses" -> sink.nodeAccesses.toDouble, "leaf_accesses" -> sink.leafAccesses.toDouble,
       "node_cache" -> stats(nc, node), "prim_cache" -> stats(pc, prim),
       "node_bytes_per_ray" -> nodeBpr, "prim_bytes_per_ray" -> primBpr, "dram_bytes_per_ray" -> (nodeBpr + primBpr),
