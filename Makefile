@@ -23,7 +23,8 @@ RUN_NODE_CACHE ?= 8192
 # A preset is the whole platform it names (caches included); each variable given overrides one field, an
 # absent one keeps the preset's value (README "Configurations").
 PLATFORM_KNOBS = $(if $(M),--m $(M)) $(if $(MPPL),--mppl $(MPPL)) $(if $(TUS),--tus $(TUS)) \
-  $(if $(STACK),--stack-depth $(STACK)) $(if $(SHORT_STACK),--short-stack $(SHORT_STACK)) $(if $(BOX_FORMAT),--box-format $(BOX_FORMAT)) $(if $(BOARD),--board $(BOARD)) $(if $(MEM_GBPS),--mem-gbps $(MEM_GBPS)) \
+  $(if $(STACK),--stack-depth $(STACK)) $(if $(SHORT_STACK),--short-stack $(SHORT_STACK)) $(if $(BOX_FORMAT),--box-format $(BOX_FORMAT)) \
+  $(if $(TRI_TEST),--tri-test $(TRI_TEST)) $(if $(TRI_FORMAT),--tri-format $(TRI_FORMAT)) $(if $(NODE_FORMAT),--node-format $(NODE_FORMAT)) $(if $(PRIM_FORMAT),--prim-format $(PRIM_FORMAT)) $(if $(BOARD),--board $(BOARD)) $(if $(MEM_GBPS),--mem-gbps $(MEM_GBPS)) \
   $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ)) $(CACHE_FLAGS)
 MODEL_ARGS = --config $(CONFIG) $(PLATFORM_KNOBS)
 TRIS       = $$(tools/tris $(SCENE))
@@ -31,10 +32,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area area-fp cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse
+        yosys verilog area area-fp cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse precision
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -107,13 +108,32 @@ check: deps
 	@test -n "$(GOLDEN)" || { echo "error: give GOLDEN=<dir made by make golden>" >&2; exit 2; }
 	@T=$(TRIS) && O=$$(mktemp -d build/check.XXXXXX) && trap "rm -rf $$O" EXIT && \
 	  $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $(GOLDEN)/rays.npy --out $$O --access-trace 0 $(MODEL_ARGS) >/dev/null && \
-	  $(PY) -m golden.check --tris "$$T" --golden $(GOLDEN) --hits $$O/hits.npy $(if $(REPORT_ONLY),--report-only)
+	  $(PY) -m golden.check --tris "$$T" --golden $(GOLDEN) --hits $$O/hits.npy --summary $$O/summary.json $(if $(REPORT_ONLY),--report-only)
 
 analyze: deps
 	@OUT=$${OUT:-build/analyze/$$(basename $(SCENE))}; G=$(GOLDEN); \
 	  if [ -z "$$G" ]; then G=$$OUT/golden; $(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=$$G >&2 || exit $$?; fi; \
 	  T=$(TRIS) && $(JAVA) rtaccel.cli.Analyze --tris "$$T" --scene-label $(SCENE) --rays $$G/rays.npy --out $$OUT $(MODEL_ARGS) && \
 	  $(PY) -m dse.plot_analysis $$OUT >&2 && echo "[analyze] CSV and PNG in $$OUT" >&2
+
+# Every numerics option on one set of rays (docs/numerics.md, "The trade, measured"): accuracy against Embree and
+# the fp32 baseline, lost hits, traversal work, DRAM bytes per ray, RTL rays/s (PRECISION_RTL=0 skips it) and the
+# IU's synthesized cost (PRECISION_AREA=yosys; empty otherwise). OUT/precision.csv + .png, default OUT
+# build/precision/<scene>; exit 3 when an option's RTL check failed.
+PRECISION_OPTIONS ?= fp32:mt fp24:mt fp16:mt bf16:mt fp32:watertight fp24:watertight fp16:watertight bf16:watertight
+PRECISION_RTL ?= 1
+PRECISION_AREA ?= none
+PRECISION_EXHAUSTIVE ?= 1000
+precision: TUS ?= 32
+precision: NODE_CACHE ?= 8192
+precision: deps
+	@[ -z "$(BOX_FORMAT)$(TRI_TEST)" ] || { echo "error: make precision runs every option itself; list them in PRECISION_OPTIONS=\"fp32:mt bf16:watertight ...\" instead of BOX_FORMAT= / TRI_TEST=" >&2; exit 2; }
+	@test -f "$(SCENE)" || { echo "error: scene '$(SCENE)' not found; give SCENE=<path to .obj or .ply>" >&2; exit 2; }
+	@OUT=$${OUT:-build/precision/$$(basename $(SCENE) | sed 's/\.[a-z]*$$//')}; G=$(GOLDEN); mkdir -p $$OUT; \
+	  if [ -z "$$G" ]; then G=$$OUT/golden; [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=$$G >&2 || exit $$?; fi; \
+	  T=$(TRIS) && $(PY) -m dse.precision --scene $(SCENE) --tris "$$T" --golden $$G --out $$OUT --java '$(JAVA)' \
+	    --knobs "$(MODEL_ARGS)" --options "$(PRECISION_OPTIONS)" --rtl $(PRECISION_RTL) --area $(PRECISION_AREA) \
+	    --exhaustive $(PRECISION_EXHAUSTIVE) $(if $(BOARD),--board $(BOARD))
 
 # The loop every multi-scene target shares: for each mesh s of $(1) (absent: skipped with a note naming
 # $(2), or an error when $(6) is "strict"), n = its name, G = $(3); the golden frame $(4) x $(5) (DEPTH, SEED)

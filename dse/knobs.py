@@ -59,6 +59,7 @@ KNOBS = {
     "STACK": Knob("--stack-depth", "an integer 1..4096", _int(1, 4096)),
     "SHORT_STACK": Knob("--short-stack", "an integer 1..64", _int(1, 64)),
     "BOX_FORMAT": Knob("--box-format", "fp32, fp24, bf16, fp16 or e<E>m<M> with E <= 8, M <= 23", _box_format),
+    "TRI_TEST": Knob("--tri-test", "mt or watertight", _one_of(("mt", "watertight"))),
     "NODE_CACHE": Knob("--node-cache", "0 or a power of two up to 65536", _cache),
     "NODE_WAYS": Knob("--node-ways", "a power of two 1..64", lambda v: _pow2(v) and v <= 64),
     "NODE_POLICY": Knob("--node-policy", f"one of {', '.join(POLICIES)}", _one_of(POLICIES)),

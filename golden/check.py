@@ -304,6 +304,7 @@ def main(argv=None):
     ap.add_argument("--tris", required=True, help="float32 (T,3,3) triangles (python -m scenes.export)")
     ap.add_argument("--golden", required=True, help="golden directory with rays.npy and hits.npy")
     ap.add_argument("--hits", required=True, help="model hits, same dtype as golden hits, same ray order")
+    ap.add_argument("--summary", help="the model's summary.json (make trace): its config and numerics go into the JSON line")
     ap.add_argument("--report-only", action="store_true",
                     help="exit 0 even when rays are unexplained (default: exit 3, 'ran, but a check failed')")
     a = ap.parse_args(argv)
@@ -314,6 +315,10 @@ def main(argv=None):
     golden = load_hits(os.path.join(a.golden, "hits.npy"), len(rays))
     model = load_hits(a.hits, len(rays))
     res = classify(tris, rays, golden, model)
+    if a.summary:
+        with open(a.summary) as fh:
+            made = json.load(fh)
+        res = {**{k: made[k] for k in ("scene", "config", "rtaccel", "numerics") if k in made}, **res}
     print(summary_text(res), file=sys.stderr)
     print(json.dumps(res))
     # A check is an exit status: the JSON line stays the last line either way.

@@ -27,10 +27,10 @@ needs_model = pytest.mark.skipif(not (CP_FILE and Path(CP_FILE).is_file()),
                                  reason="compiled model absent: run through `make test` (sets RTACCEL_CLASSPATH)")
 
 
-def model_trace(tris_path, rays_path, out, m=4, mppl=4, config="fit"):
+def model_trace(tris_path, rays_path, out, m=4, mppl=4, config="fit", extra=()):
     cp = Path(CP_FILE).read_text().strip()
     cmd = ["java", "-Xss64m", "-Xmx4g", "-cp", cp, "rtaccel.cli.Trace", "--tris", str(tris_path),
-           "--rays", str(rays_path), "--out", str(out), "--m", str(m), "--mppl", str(mppl), "--config", config]
+           "--rays", str(rays_path), "--out", str(out), "--m", str(m), "--mppl", str(mppl), "--config", config, *extra]
     res = subprocess.run(cmd, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     return load_hits(str(Path(out) / "hits.npy")), json.loads(res.stdout.strip().splitlines()[-1])
@@ -97,6 +97,21 @@ def _rays(origins, targets):
     return r[np.any(d != 0, axis=1)]
 
 
+def _edge_and_vertex_rays(tris, eyes):
+    """Rays from each eye aimed exactly at every vertex and edge midpoint of the mesh."""
+    verts = tris.reshape(-1, 3)
+    mids = ((tris + np.roll(tris, -1, axis=1)) * np.float32(0.5)).reshape(-1, 3)
+    targets = np.unique(np.concatenate([verts, mids]), axis=0)
+    return np.concatenate([_rays(e, targets) for e in eyes])
+
+
+def _room_eyes(tris, n=1):
+    lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
+    # the first eye is the one docs/numerics.md counts leaks from; the others look from other corners
+    offs = [(0.013, (1, 1, 1)), (-0.171, (1, 0.5, -0.7)), (0.237, (-0.3, 1, 0.6)), (0.311, (0.8, -0.9, 0.2))][:n]
+    return [((lo + hi) * 0.5 + np.float32(o) * (hi - lo) * np.array(v, np.float32)).astype(np.float32) for o, v in offs]
+
+
 @needs_model
 def test_rays_through_shared_edges_and_vertices_of_a_closed_room_count_leaks(tmp_path):
     """Rays from inside the closed Cornell room aimed exactly at every vertex and edge midpoint: a miss
@@ -104,12 +119,7 @@ def test_rays_through_shared_edges_and_vertices_of_a_closed_room_count_leaks(tmp
     between triangles; Embree's robust mode does not. Every leak must be an edge/vertex case of the check,
     and the count is reported (docs/numerics.md)."""
     tris = procedural.triangles("cornell")
-    verts = tris.reshape(-1, 3)
-    mids = ((tris + np.roll(tris, -1, axis=1)) * np.float32(0.5)).reshape(-1, 3)
-    targets = np.unique(np.concatenate([verts, mids]), axis=0)
-    lo, hi = verts.min(0), verts.max(0)
-    eye = ((lo + hi) * 0.5 + np.float32(0.013) * (hi - lo)).astype(np.float32)
-    rays = _rays(eye, targets)
+    rays = _edge_and_vertex_rays(tris, _room_eyes(tris))
     tp, rp = _write(tmp_path, tris, rays)
     model, _ = model_trace(tp, rp, tmp_path / "m")
     golden = embree_trace(tris, rays)
@@ -120,6 +130,25 @@ def test_rays_through_shared_edges_and_vertices_of_a_closed_room_count_leaks(tmp
     leaked = (model["prim"] < 0) & (golden["prim"] >= 0)
     assert res["classified"]["edge"] + res["classified"]["degenerate"] >= int(leaked.sum())
     assert leaks_model <= 0.05 * len(rays), "more than the rounding at shared edges can explain"
+
+
+@needs_model
+@pytest.mark.parametrize("m,mppl", [(2, 1), (4, 4), (8, 8)])
+def test_watertight_test_does_not_leak_through_shared_edges_and_vertices(m, mppl, tmp_path):
+    """TRI_TEST=watertight on the same kind of rays, from four eyes inside the closed room: every ray hits.
+    The same rays through Möller–Trumbore leak (so the rays do probe the shared edges)."""
+    tris = procedural.triangles("cornell")
+    rays = _edge_and_vertex_rays(tris, _room_eyes(tris, 4))
+    tp, rp = _write(tmp_path, tris, rays)
+    wt, summary = model_trace(tp, rp, tmp_path / "wt", m, mppl, extra=("--tri-test", "watertight"))
+    mt, _ = model_trace(tp, rp, tmp_path / "mt", m, mppl)
+    assert summary["numerics"]["tri_test"] == "watertight"
+    leaks_wt, leaks_mt = int((wt["prim"] < 0).sum()), int((mt["prim"] < 0).sum())
+    print(f"{len(rays)} rays through vertices/edges (M={m}, MPPL={mppl}): watertight leaks {leaks_wt}, Möller–Trumbore {leaks_mt}")
+    assert leaks_mt > 0, "the rays no longer probe the shared edges: Möller–Trumbore should leak on some"
+    assert leaks_wt == 0, f"{leaks_wt} of {len(rays)} rays leaked through the watertight test"
+    res = run_check(tris, rays, embree_trace(tris, rays), wt)
+    assert res["unexplained"] == 0, res
 
 
 @needs_model

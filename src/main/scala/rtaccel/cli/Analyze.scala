@@ -1,5 +1,6 @@
 package rtaccel.cli
 
+import rtaccel.config.Numerics
 import rtaccel.model.Analysis
 
 /** make analyze: bandwidth vs MPPL (Fig 4) and accesses by level (Figs 5-6) as CSV in OUT. */
@@ -40,7 +41,7 @@ object Analyze {
     Cli.writeText(out.resolve("levels.csv"), lv.toString)
     val top4 = levelRows.take(4)
     val summary = ujson.Obj(
-      "scene" -> label, "rays" -> rays.count, "m" -> base.m, "box_format" -> base.boxFormat.name, "short_stack" -> base.shortStack,
+      "scene" -> label, "rays" -> rays.count, "m" -> base.m, "box_format" -> base.boxFormat.name, "numerics" -> Numerics.json(base), "short_stack" -> base.shortStack,
       "bytes_per_ray" -> ujson.Obj.from(results.map { case (k, _, _, r) =>
         k.toString -> ujson.Obj("node" -> r.nodeBytesPerRay, "prim" -> r.primBytesPerRay, "total" -> r.totalBytesPerRay) }),
       "levels_for_mppl" -> levelMppl,

@@ -1,5 +1,6 @@
 package rtaccel.cli
 
+import rtaccel.config.Numerics
 import rtaccel.bvh.{MemoryImage, Mbvh}
 import rtaccel.model.Traversal
 
@@ -24,7 +25,7 @@ object Bench {
     }
     println(ujson.write(ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rays" -> rays.count, "triangles" -> scene.triangles,
-      "config" -> b.params.name, "m" -> p.m, "mppl" -> p.mppl, "repeat" -> repeat, "threads" -> 1,
+      "config" -> b.params.name, "numerics" -> Numerics.json(b.params), "m" -> p.m, "mppl" -> p.mppl, "repeat" -> repeat, "threads" -> 1,
       "model_build_s_median" -> median(builds.map(_._1)),
       "model_rays_per_s_median" -> rays.count / median(traces), "rtaccel" -> Cli.version)))
   }

@@ -1,5 +1,6 @@
 package rtaccel.cli
 
+import rtaccel.config.Numerics
 import rtaccel.bvh.MemoryImage
 import rtaccel.cache.{CacheModel, CacheSink, Replay}
 import rtaccel.config.{CacheParams, CachePolicy}
@@ -65,7 +66,7 @@ object CacheSim {
     val pred = rtaccel.cache.Throughput.predict(p, sink, rays.count, tus)
     val j = ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
-      "box_format" -> p.boxFormat.name, "short_stack" -> p.shortStack, "tus" -> tus, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
+      "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
       "node_accesses" -> sink.nodeAccesses.toDouble, "leaf_accesses" -> sink.leafAccesses.toDouble,
       "node_cache" -> stats(nc, node), "prim_cache" -> stats(pc, prim),
       "node_bytes_per_ray" -> nodeBpr, "prim_bytes_per_ray" -> primBpr, "dram_bytes_per_ray" -> (nodeBpr + primBpr),

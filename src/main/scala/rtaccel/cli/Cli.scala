@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import java.nio.file.{Path, Paths}
-import rtaccel.config.{CacheParams, CachePolicy, Fit, PlatformParams, Presets}
+import rtaccel.config.{CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Presets, TriTest}
 import rtaccel.bvh.Mbvh
 import rtaccel.io.{InputError, Npy}
 import rtaccel.scene.{Normalize, Rays, Scene}
@@ -36,6 +36,8 @@ object Cli {
     * below what the scene needs: rays that need more are flagged overflow (see Cli.build).
     */
   def params(a: Args): PlatformParams = {
+    a.opt("node-format").foreach(Numerics.checkNodeFormat); a.opt("prim-format").foreach(Numerics.checkPrimFormat)
+    a.opt("tri-format").foreach(Numerics.checkTriFormat)
     val cfg = a.get("config", "fit")
     val preset = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
     // BOARD= brings its memory bandwidth and clock; MEM_GBPS= / CLOCK_MHZ= override either
@@ -49,6 +51,7 @@ object Cli {
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),
       boxFormat = a.opt("box-format").map(rtaccel.fp.FpFormat.parse).getOrElse(base.boxFormat),
+      triTest = a.opt("tri-test").map(TriTest.parse).getOrElse(base.triTest),
       nodeCache = cacheArg(a, "node", base.nodeCache), primCache = cacheArg(a, "prim", base.primCache))
   }
 

@@ -22,6 +22,10 @@ object Flags {
     f("tus", "traversal units"), f("stack-depth", "TU stack entries (STACK=)"),
     f("short-stack", "ring of that many entries with restart instead of the full stack (SHORT_STACK=)"),
     f("box-format", "arithmetic of the ray-box test: fp32 | fp24 | bf16 | fp16 | e<E>m<M> (BOX_FORMAT=; narrower ones round outward)"),
+    f("tri-test", "ray-triangle test: mt (Moller-Trumbore, the paper's) | watertight (Woop et al. 2013) (TRI_TEST=)"),
+    f("tri-format", "arithmetic of the triangle test: fp32 (TRI_FORMAT=)"),
+    f("node-format", "node layout: full (6 fp32 planes per child) (NODE_FORMAT=)"),
+    f("prim-format", "primitive layout: slot64 (9 fp32 + id in 64 B) (PRIM_FORMAT=)"),
     f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"),
     f("board", "board of boards/catalog.json (BOARD=): its memory bandwidth and clock unless MEM_GBPS / CLOCK_MHZ are given"),
     f("mem-gbps", "peak memory bandwidth in GB/s (MEM_GBPS=)"), f("clock-mhz", "platform clock in MHz (CLOCK_MHZ=)"),
@@ -33,7 +37,8 @@ object Flags {
     f("max-level", "MAX_LEVEL of the level replacement policy"))
   val platform: Seq[Flag] = model ++ cache
 
-  val trace: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("access-trace", "1 writes trace.npy"))
+  val trace: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("access-trace", "1 writes trace.npy"),
+    f("exhaustive", "the first N rays also against every triangle without boxes: lost_hits counts what a box test lost"))
   val cacheSim: Seq[Flag] = inputs ++ platform ++ Seq(f("sweep-out", "miss-rate grid CSV"), f("repeat", "replays, median timed"))
   val analyze: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("mppls", "MPPL list"))
   val bench: Seq[Flag] = inputs ++ platform ++ Seq(f("repeat", "repeats, median reported"))

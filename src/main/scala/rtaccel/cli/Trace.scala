@@ -1,5 +1,6 @@
 package rtaccel.cli
 
+import rtaccel.config.Numerics
 import rtaccel.bvh.MemoryImage
 import rtaccel.io.Npy
 import rtaccel.model.{AccessRecorder, RayStats, Traversal}
@@ -19,6 +20,10 @@ object Trace {
     val secs = (System.nanoTime() - t0) / 1e9
     val p = b.params
     val n = math.max(1, rays.count).toDouble
+    val exhaustive = a.opt("exhaustive").map(_ => a.int("exhaustive", 0)).map { k =>
+      if (k < 0) throw new rtaccel.io.InputError(s"--exhaustive must be >= 0 rays (got $k)")
+      rtaccel.model.Exhaustive.check(p, b.scene, rays, hits, k)
+    }
     val summary = ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "config" -> p.name, "rtaccel" -> Cli.version,
       "m" -> p.m, "mppl" -> p.mppl, "triangles" -> b.scene.triangles, "nodes" -> b.bvh.numNodes,
@@ -26,12 +31,16 @@ object Trace {
       "ref_fields" -> ujson.Obj("node_id_bits" -> p.refs.nodeIdBits, "prim_index_bits" -> p.refs.primIndexBits,
         "count_bits" -> p.refs.countBits, "level_bits" -> p.refs.levelBits, "ref_bits" -> p.refs.refBits),
       "stack_depth" -> p.stackDepth, "normalize_exponent" -> scaleExp, "rays" -> rays.count, "hits" -> hits.prim.count(_ >= 0),
-      "node_fetches" -> st.nodeFetches.toDouble, "leaf_fetches" -> st.leafFetches.toDouble, "prim_tests" -> st.primTests.toDouble,
+      "node_fetches" -> st.nodeFetches.toDouble, "leaf_fetches" -> st.leafFetches.toDouble, "prim_tests" -> st.primTests.toDouble, "box_tests" -> st.boxTests.toDouble,
       "node_bytes_per_ray" -> st.nodeFetches * p.nodeAccessBytes / n,
       "prim_bytes_per_ray" -> st.primTests * p.primAccessBytes / n,
       "max_stack" -> st.maxStack, "stack_overflow_rays" -> st.overflows, "overflowed" -> st.overflows,
-      "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "restarts" -> st.restarts.toDouble,
+      "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "restarts" -> st.restarts.toDouble,
       "build_s" -> b.buildSeconds, "trace_s" -> secs, "rays_per_s" -> rays.count / math.max(secs, 1e-9))
+    exhaustive.foreach { e =>
+      summary("exhaustive_rays") = e.rays; summary("lost_hits") = e.lost
+      summary("lost_hit_rays") = ujson.Arr(e.firstLost.map(ujson.Num(_)): _*)
+    }
     // Outputs are complete in memory before the first file is written.
     hits.save(out.resolve("hits.npy"))
     if (rec.rows > 0) Npy.writeInts(out.resolve("trace.npy"), rec.toArray, 5)

@@ -83,7 +83,8 @@ final case class PlatformParams(
   hw: HwLimits = HwLimits(),
   shortStack: Int = 0, // > 0: a ring of that many entries with restart instead of the full stack
   treeLevels: Int = 64, // node levels a TU can walk: the short stack keeps one trail counter per level
-  boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32 // arithmetic of the slab test; narrower ones round outward
+  boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // arithmetic of the slab test; narrower ones round outward
+  triTest: TriTest = TriTest.Mt // the ray-triangle test (Numerics: the formats every JSON line names)
 ) {
   require(rtaccel.fp.FpFormat.fp32.holds(boxFormat),
     s"BOX_FORMAT=${boxFormat.name} is wider than fp32 in exponent or fraction; the box test takes fp32 inputs, so use a format within e8m23")
@@ -114,6 +115,15 @@ final case class PlatformParams(
   /** Bytes one node fetch moves (paper: 128 B for QBVH); defaults to the node's stored size. */
   val nodeAccessBytes: Int = if (nodeAccessBytesOverride > 0) nodeAccessBytesOverride else nodeStrideBytes
   require(nodeAccessBytes >= nodeBits / 8, s"node access of $nodeAccessBytes B is smaller than a node (${nodeBits / 8} B); raise the node access size")
+  /** Ulps of the box format added to every box's exit distance (tfar) before the hit comparison: none for
+    * Möller–Trumbore (the paper's test, bit-exact as before); with the watertight test at least
+    * Numerics.watertightBoxSlack relative, so that no box loses a hit the triangle test would find
+    * (docs/numerics.md, "The watertight triangle test").
+    */
+  val boxSlackUlps: Int = {
+    val e = boxFormat.manBits + 1 - Numerics.watertightBoxSlackLog2
+    if (triTest != TriTest.Watertight) 0 else if (e <= 0) 1 else 1 << e
+  }
   val tuBits: Int = math.max(1, 32 - Integer.numberOfLeadingZeros(tus - 1))
   val cyclesPerSecond: Double = clockMhz * 1e6
   val memBytesPerCycle: Double = memory.bytesPerSecond * memory.sustainedEfficiency / cyclesPerSecond

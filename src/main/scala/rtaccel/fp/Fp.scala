@@ -183,32 +183,40 @@ object Fp {
   def subDirected(f: FpFormat, fo: FpFormat, a: UInt, b: UInt, toPos: Bool): UInt = addCore(f, a, b, negB = true, fo, Some(toPos))
 
   /** x of format f in format fo: exact when fo holds it, else rounded toward +inf (toPos) or -inf. */
-  def convert(f: FpFormat, fo: FpFormat, x: UInt, toPos: Bool): UInt = {
+  def convert(f: FpFormat, fo: FpFormat, x: UInt, toPos: Bool): UInt = convertCore(f, fo, x, Some(toPos))
+  /** x of format f in format fo, rounded to nearest even (exact when fo holds it). */
+  def convertNearest(f: FpFormat, fo: FpFormat, x: UInt): UInt = convertCore(f, fo, x, None)
+
+  private def convertCore(f: FpFormat, fo: FpFormat, x: UInt, toPos: Option[Bool]): UInt = {
     val u = new Unpacked(f, x)
     val ew = expW(f) max expW(fo)
-    val rounded = roundPack(fo, u.sign, u.exp.zext.pad(ew) + (fo.bias - f.bias).S, u.sig, false.B, toPos = Some(toPos))
+    val rounded = roundPack(fo, u.sign, u.exp.zext.pad(ew) + (fo.bias - f.bias).S, u.sig, false.B, toPos = toPos)
     Mux(u.isNaN, nan(fo), Mux(u.isInf, packInf(fo, u.sign), Mux(u.isZero, packZero(fo, u.sign), rounded)))
   }
 
   // ---------------------------------------------------------------------------------------------------------
   // mul
 
-  def mul(f: FpFormat, a: UInt, b: UInt): UInt = mulCore(f, a, b, None)
+  def mul(f: FpFormat, a: UInt, b: UInt): UInt = mulCore(f, a, b, f, None)
   /** a * b rounded toward +inf (toPos) or -inf. */
-  def mulDirected(f: FpFormat, a: UInt, b: UInt, toPos: Bool): UInt = mulCore(f, a, b, Some(toPos))
+  def mulDirected(f: FpFormat, a: UInt, b: UInt, toPos: Bool): UInt = mulCore(f, a, b, f, Some(toPos))
+  /** a * b of format f in the wider format fo, rounded to nearest: exact when fo has 2m+1 fraction bits and the
+    * exponent range of the product (fp32 x fp32 in binary64), with a multiplier of f's significand width only.
+    */
+  def mulWide(f: FpFormat, fo: FpFormat, a: UInt, b: UInt): UInt = mulCore(f, a, b, fo, None)
 
-  private def mulCore(f: FpFormat, a: UInt, b: UInt, toPos: Option[Bool]): UInt = {
+  private def mulCore(f: FpFormat, a: UInt, b: UInt, fo: FpFormat, toPos: Option[Bool]): UInt = {
     val ua = new Unpacked(f, a)
     val ub = new Unpacked(f, b)
     val sign = ua.sign ^ ub.sign
     val prod = ua.sig * ub.sig // 2m+2 bits, binary point after the top bit pair
-    val ew = expW(f)
-    val exp = (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (f.bias - 1).S
-    val rounded = roundPack(f, sign, exp, prod, false.B, toPos = toPos)
+    val ew = expW(f) max expW(fo)
+    val exp = (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
+    val rounded = roundPack(fo, sign, exp, prod, false.B, toPos = toPos)
     val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
-    Mux(isNaN, nan(f),
-      Mux(ua.isInf || ub.isInf, packInf(f, sign),
-        Mux(ua.isZero || ub.isZero, packZero(f, sign), rounded)))
+    Mux(isNaN, nan(fo),
+      Mux(ua.isInf || ub.isInf, packInf(fo, sign),
+        Mux(ua.isZero || ub.isZero, packZero(fo, sign), rounded)))
   }
 
   // ---------------------------------------------------------------------------------------------------------

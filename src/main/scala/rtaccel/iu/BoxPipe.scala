@@ -62,6 +62,17 @@ class BoxPipe(p: PlatformParams) extends Module {
     (t, RegNext(RegNext(tmin1)), RegNext(RegNext(tmax1)))
   }
 
+  /** tfar moved p.boxSlackUlps ulps toward +inf on its bits (TRI_TEST=watertight; model.BoxSlack): an adder, not
+    * a multiplier. Positive values grow (at most to +inf), negative ones shrink toward zero and past it.
+    */
+  private def slackUp(x: UInt): UInt = if (p.boxSlackUlps == 0) x else {
+    val k = p.boxSlackUlps.U; val w = bf.width
+    val mag = x(w - 2, 0); val inf = (BigInt(bf.maxExp) << bf.manBits).U((w - 1).W)
+    val grown = mag +& k
+    Mux(mag > inf, x, Mux(!x(w - 1), Cat(0.U(1.W), Mux(grown > inf, inf, grown(w - 2, 0))),
+      Mux(mag > k, Cat(1.U(1.W), mag - k), Cat(0.U(1.W), k - mag))))
+  }
+
   val lohi = stage(VecInit(Seq.tabulate(p.m, 3) { (c, a) =>
     val t0 = t01(6 * c + a); val t1 = t01(6 * c + 3 + a)
     Seq(Fp.minProp(bf, t0, t1), Fp.maxProp(bf, t0, t1))
@@ -76,7 +87,7 @@ class BoxPipe(p: PlatformParams) extends Module {
     val tfar = Fp.minNum(bf, Fp.minNum(bf, Fp.minNum(bf, tmaxB, hi(0)), hi(1)), hi(2))
     // the TUs rank and cull in fp32: widening is exact
     res.tnear(c) := (if (bf == f) tnear else Fp.convert(bf, f, tnear, false.B))
-    res.hit(c) := Fp.le(bf, tnear, tfar) && j3.words(7 * c + 6) =/= 0.U && !j3.err
+    res.hit(c) := Fp.le(bf, tnear, slackUp(tfar)) && j3.words(7 * c + 6) =/= 0.U && !j3.err
     res.cref(c) := j3.words(7 * c + 6)
   }
   io.out.bits := RegNext(res)

@@ -2,7 +2,7 @@ package rtaccel.iu
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.PlatformParams
+import rtaccel.config.{PlatformParams, TriTest}
 import rtaccel.mc.{FetchBeat, FetchReq}
 
 /** The IU of paper Fig 1: takes requests from all TUs (round-robin), asks the memory controller for the
@@ -85,14 +85,18 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int) extends Module {
   boxPipe.io.in.bits.tmax := job.tmax
   boxPipe.io.in.bits.words := VecInit(words.take(7 * p.m))
   boxPipe.io.in.bits.err := unitErr
-  val triPipe = Module(new TriPipe(p))
-  triPipe.io.in.valid := unitDone && isLeaf
-  triPipe.io.in.bits.tu := job.tu
-  triPipe.io.in.bits.ray := job.ray
-  triPipe.io.in.bits.tmax := job.tmax
-  triPipe.io.in.bits.words := VecInit(words.take(10))
-  triPipe.io.in.bits.last := jobDone
-  triPipe.io.in.bits.err := unitErr
+  // TRI_TEST: both pipes take the same job and give the same result, at their own latencies
+  val (triIn, triOut) = p.triTest match {
+    case TriTest.Mt => val t = Module(new TriPipe(p)); (t.io.in, t.io.out)
+    case TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.io.in, t.io.out)
+  }
+  triIn.valid := unitDone && isLeaf
+  triIn.bits.tu := job.tu
+  triIn.bits.ray := job.ray
+  triIn.bits.tmax := job.tmax
+  triIn.bits.words := VecInit(words.take(10))
+  triIn.bits.last := jobDone
+  triIn.bits.err := unitErr
   io.box := boxPipe.io.out
-  io.tri := triPipe.io.out
+  io.tri := triOut
 }

@@ -16,15 +16,32 @@ final class PreparedRay(val ox: Float, val oy: Float, val oz: Float, val dx: Flo
   * Hit iff tnear <= tfar; the entry distance tnear orders the children.
   */
 object RayBox {
-  /** Returns tnear on a hit, NaN on a miss. */
-  def test(r: PreparedRay, tmax: Float, mnx: Float, mny: Float, mnz: Float, mxx: Float, mxy: Float, mxz: Float): Float = {
+  /** Returns tnear on a hit, NaN on a miss. `slack`: ulps added to tfar before the comparison (BoxSlack). */
+  def test(r: PreparedRay, tmax: Float, mnx: Float, mny: Float, mnz: Float, mxx: Float, mxy: Float, mxz: Float,
+           slack: Int = 0): Float = {
     val t0x = (mnx - r.ox) * r.ix; val t1x = (mxx - r.ox) * r.ix
     val t0y = (mny - r.oy) * r.iy; val t1y = (mxy - r.oy) * r.iy
     val t0z = (mnz - r.oz) * r.iz; val t1z = (mxz - r.oz) * r.iz
     val tnear = maxNum(maxNum(maxNum(r.tmin, minProp(t0x, t1x)), minProp(t0y, t1y)), minProp(t0z, t1z))
     val tfar = minNum(minNum(minNum(tmax, maxProp(t0x, t1x)), maxProp(t0y, t1y)), maxProp(t0z, t1z))
-    if (tnear <= tfar) tnear else Float.NaN
+    if (tnear <= (if (slack == 0) tfar else BoxSlack.up32(tfar, slack))) tnear else Float.NaN
   }
+}
+
+/** The box test's slack (PlatformParams.boxSlackUlps, TRI_TEST=watertight): tfar moved `k` ulps toward +inf on
+  * its raw bits (a positive value grows up to +inf, a negative one shrinks toward zero and past it, counting -0 and
+  * +0 as one point; NaN and +inf stay).
+  */
+object BoxSlack {
+  def up(f: rtaccel.fp.FpFormat, bits: Long, k: Int): Long = {
+    val magMask = (1L << (f.width - 1)) - 1; val inf = f.maxExp.toLong << f.manBits
+    val mag = bits & magMask; val neg = (bits >>> (f.width - 1)) == 1
+    if (mag > inf) bits // NaN
+    else if (!neg) math.min(mag + k, inf)
+    else if (mag > k) bits - k else k - mag // across zero (-0 and +0 are one point)
+  }
+  def up32(x: Float, k: Int): Float =
+    java.lang.Float.intBitsToFloat(up(rtaccel.fp.FpFormat.fp32, java.lang.Float.floatToRawIntBits(x) & 0xffffffffL, k).toInt)
 }
 
 /** Möller–Trumbore (as in the paper), in this order:
@@ -60,7 +77,7 @@ object RayTriangle {
   *   tmin rounded down, tmax up; then the fp32 test's min/max, chains and comparison in the narrow format.
   * A box the exact ray meets is never rejected. Returns tnear (widened to fp32, exactly) on a hit, NaN on a miss.
   */
-final class RayBoxOutward(bf: rtaccel.fp.FpFormat) {
+final class RayBoxOutward(bf: rtaccel.fp.FpFormat, slack: Int = 0) {
   import rtaccel.fp.{FpFormat, SoftFloat}
   import SoftFloat.{Down, Up}
   private val s32 = new SoftFloat(FpFormat.fp32); private val sb = new SoftFloat(bf)
@@ -87,6 +104,6 @@ final class RayBoxOutward(bf: rtaccel.fp.FpFormat) {
       tfar = sb.minNum(tfar, sb.maxProp(t0, t1))
       a += 1
     }
-    if (sb.le(tnear, tfar)) java.lang.Float.intBitsToFloat(s32.convertFrom(sb, tnear, Down).toInt) else Float.NaN
+    if (sb.le(tnear, BoxSlack.up(bf, tfar, slack))) java.lang.Float.intBitsToFloat(s32.convertFrom(sb, tnear, Down).toInt) else Float.NaN
   }
 }

@@ -33,8 +33,11 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private val tri = new RayTriangle.Result
   private var slot = 0
   // BOX_FORMAT narrower than fp32: the hardware's outward-rounded slab test (null: the fp32 test)
-  private val outward = if (p.boxFormat == rtaccel.fp.FpFormat.fp32) null else new RayBoxOutward(p.boxFormat)
+  private val outward = if (p.boxFormat == rtaccel.fp.FpFormat.fp32) null else new RayBoxOutward(p.boxFormat, p.boxSlackUlps)
   private val coord: Int => Float = k => img.primCoord(slot, k)
+  // TRI_TEST=watertight: the sheared-edge test (null: Möller–Trumbore)
+  private val slack = p.boxSlackUlps
+  private val watertight = if (p.triTest == rtaccel.config.TriTest.Watertight) new RayTriangleWatertight else null
 
   def traceAll(rays: Rays, sink: AccessSink = AccessSink.none, stats: RayStats = new RayStats): Hits = {
     val h = Hits.empty(rays.count)
@@ -169,7 +172,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     while (s < first + n) {
       slot = s; st.primTests += 1
       if (faults.primBad(s)) leaf.readError = true
-      else if (RayTriangle.test(r, tmax, coord, tri)) { tmax = tri.t; leaf.prim = img.primId(s); leaf.u = tri.u; leaf.v = tri.v }
+      else if (if (watertight == null) RayTriangle.test(r, tmax, coord, tri) else watertight.test(r, tmax, coord, tri)) { tmax = tri.t; leaf.prim = img.primId(s); leaf.u = tri.u; leaf.v = tri.v }
       s += 1
     }
     tmax
@@ -184,7 +187,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
       val ref = img.childRef(id, j)
       if (!codec.isEmpty(ref)) {
         st.boxTests += 1
-        val tn = if (outward == null) RayBox.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
+        val tn = if (outward == null) RayBox.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5), slack)
           else outward.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
         if (!tn.isNaN) {
           var pos = k

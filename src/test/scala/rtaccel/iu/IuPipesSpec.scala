@@ -1,11 +1,12 @@
 package rtaccel.iu
 
 import chisel3._
+import chisel3.util.Valid
 import chiseltest._
 import chiseltest.simulator.VerilatorBackendAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.util.Random
-import rtaccel.config.PlatformParams
+import rtaccel.config.{PlatformParams, TriTest}
 import rtaccel.fp.FpFormat
 import rtaccel.model.{PreparedRay, RayBox, RayBoxOutward, RayTriangle}
 
@@ -40,12 +41,17 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   // BOX_FORMAT: fp32 against RayBox, narrower formats against RayBoxOutward (the same job stream)
   // (make regress adds fp16 and fp24; each format is one Verilator build of about a minute, and FpDirectedSpec
   // checks fp16's operators in make test)
-  private val boxFormats = Seq(FpFormat.fp32 -> 20000, FpFormat.parse("bf16") -> 3000) ++
-    (if (sys.env.get("RTACCEL_REGRESS").contains("full")) Seq(FpFormat.parse("fp16") -> 6000, FpFormat.parse("fp24") -> 6000) else Nil)
-  for ((bf, n) <- boxFormats)
-  test(s"box pipeline (BOX_FORMAT=${bf.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
-    val outward = if (bf == FpFormat.fp32) None else Some(new RayBoxOutward(bf))
-    test(new BoxPipe(p.copy(boxFormat = bf))).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+  // TRI_TEST=watertight adds the exit-distance slack (PlatformParams.boxSlackUlps) to the same pipe
+  private val regress = sys.env.get("RTACCEL_REGRESS").contains("full")
+  private val boxFormats = Seq((FpFormat.fp32, TriTest.Mt, 20000), (FpFormat.parse("bf16"), TriTest.Mt, 3000),
+    (FpFormat.fp32, TriTest.Watertight, 5000)) ++
+    (if (regress) Seq((FpFormat.parse("fp16"), TriTest.Mt, 6000), (FpFormat.parse("fp24"), TriTest.Mt, 6000),
+      (FpFormat.parse("bf16"), TriTest.Watertight, 6000)) else Nil)
+  for ((bf, tt, n) <- boxFormats)
+  test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
+    val pb = p.copy(boxFormat = bf, triTest = tt)
+    val outward = if (bf == FpFormat.fp32) None else Some(new RayBoxOutward(bf, pb.boxSlackUlps))
+    test(new BoxPipe(pb)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
       val lat = 4
       val expected = scala.collection.mutable.Queue[(Seq[Boolean], Seq[BigInt])]()
       for (cycle <- 0 until n + lat) {
@@ -62,7 +68,7 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
           words.zipWithIndex.foreach { case (w, i) => dut.io.in.bits.words(i).poke(w.U) }
           val res = (0 until p.m).map { c =>
             def w(k: Int) = java.lang.Float.intBitsToFloat(words(7 * c + k).toInt)
-            val t = outward.fold(RayBox.test(r, tmax, w(0), w(1), w(2), w(3), w(4), w(5)))(_.test(r, tmax, w(0), w(1), w(2), w(3), w(4), w(5)))
+            val t = outward.fold(RayBox.test(r, tmax, w(0), w(1), w(2), w(3), w(4), w(5), pb.boxSlackUlps))(_.test(r, tmax, w(0), w(1), w(2), w(3), w(4), w(5)))
             (!t.isNaN && words(7 * c + 6) != 0, bits(if (t.isNaN) 0f else t))
           }
           expected.enqueue((res.map(_._1), res.map(_._2)))
@@ -80,42 +86,71 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
     }
   }
 
-  test("triangle pipeline == RayTriangle on 20000 random and degenerate primitives, one per cycle") {
-    test(new TriPipe(p)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
-      val lat = TriPipe.latency(p)
-      val expected = scala.collection.mutable.Queue[(Boolean, Seq[BigInt], Boolean)]()
-      val out = new RayTriangle.Result
-      for (cycle <- 0 until 20000 + lat) {
-        if (cycle < 20000) {
-          val (rf, r, tmax) = ray()
-          val v = Array.fill(9)((rnd.nextFloat() - 0.5f) * 3)
-          rnd.nextInt(8) match {
-            case 0 => System.arraycopy(v, 0, v, 3, 3)                               // repeated vertex
-            case 1 => for (k <- 0 until 3) v(6 + k) = 2 * v(3 + k) - v(k)           // collinear
-            case 2 => for (k <- 0 until 9) v(k) = v(k) * 1e-20f                      // underflowing products
-            case 3 => for (k <- 0 until 9) v(k) = v(k) * 1e13f                       // overflowing products
-            case _ =>
-          }
-          dut.io.in.valid.poke(true.B); dut.io.in.bits.tu.poke(2.U); pokeRay(dut.io.in.bits.ray, rf)
-          dut.io.in.bits.tmax.poke(bits(tmax).U); dut.io.in.bits.last.poke((cycle % 3 == 0).B)
-          for (k <- 0 until 9) dut.io.in.bits.words(k).poke(bits(v(k)).U)
-          dut.io.in.bits.words(9).poke(cycle.U)
-          val hit = RayTriangle.test(r, tmax, v, out)
-          expected.enqueue((hit, Seq(bits(out.t), bits(out.u), bits(out.v)), cycle % 3 == 0))
-        } else dut.io.in.valid.poke(false.B)
-        if (cycle >= lat) {
-          dut.io.out.valid.expect(true.B)
-          val (hit, tuv, last) = expected.dequeue()
-          dut.io.out.bits.hit.expect(hit.B, s"cycle $cycle")
-          dut.io.out.bits.last.expect(last.B)
-          dut.io.out.bits.prim.expect((cycle - lat).U)
-          if (hit) {
-            dut.io.out.bits.t.expect(tuv(0).U, s"cycle $cycle t"); dut.io.out.bits.u.expect(tuv(1).U, s"cycle $cycle u")
-            dut.io.out.bits.v.expect(tuv(2).U, s"cycle $cycle v")
-          }
+  /** Vertices whose edge-function products round to the same binary32 value while their exact values differ
+    * (coordinates 1 + k ulp): the watertight test's binary64 recomputation decides these. `z` keeps the
+    * ray's shear exact (a ray along z from the z axis sees the vertices' own x and y).
+    */
+  private def nearTie(): Array[Float] = Array.tabulate(9)(k => if (k % 3 == 2) rnd.nextFloat() * 4 - 2
+    else java.lang.Float.intBitsToFloat(java.lang.Float.floatToRawIntBits(if (rnd.nextBoolean()) 1f else -1f) + rnd.nextInt(4)))
+  private def zRay(): (Array[Float], PreparedRay, Float) = {
+    val dz = if (rnd.nextBoolean()) 1f else -1f
+    val r = new PreparedRay(0f, 0f, -5f * dz, 0f, if (rnd.nextBoolean()) 0f else -0f, dz, 0f, Float.PositiveInfinity)
+    (Array(0f, 0f, -5f * dz, 0f, r.dy, dz, r.ix, r.iy, r.iz, 0f), r, Float.PositiveInfinity)
+  }
+
+  /** One triangle pipe against its model, `n` jobs back to back: random and degenerate primitives, and (for the
+    * watertight test) near ties that take the binary64 path.
+    */
+  private def triPipeTest[T <: Module](name: String, n: Int, pipe: => T, lat: Int, io: T => (Valid[TriJob], Valid[TriResult]),
+                                      model: (PreparedRay, Float, Array[Float], RayTriangle.Result) => Boolean, ties: Boolean): Unit =
+    test(s"$name == its model on $n random and degenerate primitives, one per cycle") {
+      test(pipe).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+        val (in, outIo) = io(dut)
+        val expected = scala.collection.mutable.Queue[(Boolean, Seq[BigInt], Boolean)]()
+        val out = new RayTriangle.Result
+        var hits = 0; var tieJobs = 0
+        for (cycle <- 0 until n + lat) {
+          if (cycle < n) {
+            val tie = ties && rnd.nextInt(4) == 0
+            val (rf, r, tmax) = if (tie) zRay() else ray()
+            val v = if (tie) { tieJobs += 1; nearTie() } else Array.fill(9)((rnd.nextFloat() - 0.5f) * 3)
+            if (!tie) rnd.nextInt(8) match {
+              case 0 => System.arraycopy(v, 0, v, 3, 3)                               // repeated vertex
+              case 1 => for (k <- 0 until 3) v(6 + k) = 2 * v(3 + k) - v(k)           // collinear
+              case 2 => for (k <- 0 until 9) v(k) = v(k) * 1e-20f                      // underflowing products
+              case 3 => for (k <- 0 until 9) v(k) = v(k) * 1e13f                       // overflowing products
+              case 4 => for (k <- 0 until 3) v(k) = rf(k)                              // a vertex at the origin
+              case _ =>
+            }
+            in.valid.poke(true.B); in.bits.tu.poke(2.U); pokeRay(in.bits.ray, rf)
+            in.bits.tmax.poke(bits(tmax).U); in.bits.last.poke((cycle % 3 == 0).B); in.bits.err.poke((cycle % 97 == 5).B)
+            for (k <- 0 until 9) in.bits.words(k).poke(bits(v(k)).U)
+            in.bits.words(9).poke(cycle.U)
+            val hit = cycle % 97 != 5 && model(r, tmax, v, out)
+            if (hit) hits += 1
+            expected.enqueue((hit, Seq(bits(out.t), bits(out.u), bits(out.v)), cycle % 3 == 0))
+          } else in.valid.poke(false.B)
+          if (cycle >= lat) {
+            outIo.valid.expect(true.B)
+            val (hit, tuv, last) = expected.dequeue()
+            outIo.bits.hit.expect(hit.B, s"cycle $cycle")
+            outIo.bits.last.expect(last.B)
+            outIo.bits.prim.expect((cycle - lat).U)
+            if (hit) {
+              outIo.bits.t.expect(tuv(0).U, s"cycle $cycle t"); outIo.bits.u.expect(tuv(1).U, s"cycle $cycle u")
+              outIo.bits.v.expect(tuv(2).U, s"cycle $cycle v")
+            }
+          } else outIo.valid.expect(false.B)
+          dut.clock.step()
         }
-        dut.clock.step()
+        assert(hits > n / 50, s"only $hits of $n jobs hit: the comparison would not see the hit path")
+        info(s"$hits hits; $tieJobs near-tie jobs")
       }
     }
-  }
+
+  triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe)", 20000, new TriPipe(p), TriPipe.latency(p), d => (d.io.in, d.io.out),
+    (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
+  private val watertight = new rtaccel.model.RayTriangleWatertight
+  triPipeTest[WatertightPipe]("watertight pipe (WatertightPipe)", 20000, new WatertightPipe(p), WatertightPipe.latency(p),
+    d => (d.io.in, d.io.out), (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true)
 }

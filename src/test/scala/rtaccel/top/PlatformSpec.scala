@@ -3,6 +3,7 @@ package rtaccel.top
 import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
 import rtaccel.cli.{Cli, Simulate}
+import rtaccel.config.TriTest
 import rtaccel.config.{CacheParams, CachePolicy, Presets}
 import rtaccel.model.MemFaults
 import rtaccel.scene.{Rays, Scene}
@@ -34,11 +35,11 @@ class PlatformSpec extends AnyFunSuite {
 
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
-                     short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32) = {
+                     short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
-      shortStack = short, boxFormat = box)
+      shortStack = short, boxFormat = box, triTest = tri)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed))
@@ -126,6 +127,22 @@ class PlatformSpec extends AnyFunSuite {
     val agree = (0 until rays.count).count(i => bf.hits.prim(i) == fp.prim(i))
     info(s"$agree of ${rays.count} rays hit the same primitive as with fp32 boxes")
   }
+
+  // TRI_TEST=watertight: the watertight pipe and the box slack in the IU equal the model's traversal; the slack
+  // can only add work. 8 TUs in make test, 1 TU with other caches in make regress.
+  private val watertightCases = Seq((8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31)) ++
+    (if (sys.env.get("RTACCEL_REGRESS").contains("full")) Seq((1, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0)) else Nil)
+  for ((tus, node, prim, jitter) <- watertightCases)
+    test(s"TRI_TEST=watertight at $tus TU(s) with caches: bit-exact against the model, no fewer node fetches than Möller–Trumbore") {
+      val wt = runOne(tus, 4, 4, rays, scene, jitter, node = node, prim = prim, tri = TriTest.Watertight)
+      val (mt, mtNodes) = modelRun(Presets.paper2017.copy(tus = tus))
+      val j = wt.json
+      info(f"node fetches: watertight ${j("node_requests").num}%.0f, Möller–Trumbore $mtNodes")
+      assert(j("node_requests").num >= mtNodes && j("numerics")("tri_test").str == "watertight")
+      val agree = (0 until rays.count).count(i => wt.hits.prim(i) == mt.prim(i))
+      info(s"$agree of ${rays.count} rays hit the same primitive as with Möller–Trumbore")
+      assert(agree > rays.count * 9 / 10, "the two triangle tests should disagree only at edges")
+    }
 
   /** The reference model alone on this spec's scene and rays: its hits and node fetches. */
   private def modelRun(p: rtaccel.config.PlatformParams): (rtaccel.scene.Hits, Long) = {
