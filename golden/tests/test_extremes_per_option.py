@@ -1,0 +1,79 @@
+"""The extreme-value suite of docs/numerics.md run for every numerics option (BOX_FORMAT x TRI_TEST), not only fp32:
+per option no lost rays, no hit a box test lost (against every triangle without boxes), no leak out of the closed
+room along axis-parallel and subnormal directions, ±0 alike, every ray of the room scaled by 1e±30 hitting, and -
+for the watertight test - no leak through shared edges and vertices. RTL == model for these options is PlatformSpec's
+and IuPipesSpec's. Needs the compiled model (make test sets RTACCEL_CLASSPATH) and the fixtures."""
+import numpy as np
+import pytest
+
+from golden.io import load_hits, load_rays
+from scenes import procedural
+
+from .test_reference_model import FIX, _edge_and_vertex_rays, _room_eyes, _write, model_trace, needs_model, run_check
+from golden.trace import embree_trace
+
+OPTIONS = [(b, t) for t in ("mt", "watertight") for b in ("fp32", "fp24", "fp16", "bf16")]
+SUBNORMAL = np.float32(1e-40)
+
+
+def _trace(tmp_path, tris, rays, box, tri, name, exhaustive=0):
+    d = tmp_path / name
+    d.mkdir()
+    tp, rp = _write(d, tris, rays)
+    extra = ("--box-format", box, "--tri-test", tri) + (("--exhaustive", str(exhaustive)) if exhaustive else ())
+    hits, summary = model_trace(tp, rp, d / "m", extra=extra)
+    assert summary["numerics"]["box_format"] == box and summary["numerics"]["tri_test"] == tri
+    return hits, summary
+
+
+@needs_model
+@pytest.mark.parametrize("box,tri", OPTIONS)
+def test_extreme_values_for_every_option(box, tri, tmp_path):
+    room = procedural.triangles("cornell")
+    lo, hi = room.reshape(-1, 3).min(0), room.reshape(-1, 3).max(0)
+    # axis-parallel rays whose other components are +0, -0 or subnormal, from points inside the room, some of them
+    # exactly on the planes of the boxes inside it (the grid hits the room's own coordinates)
+    g = np.linspace(0.05, 0.95, 5, dtype=np.float32)
+    pts = np.array([lo + (hi - lo) * np.array([a, b, c], np.float32) for a in g for b in g for c in g], np.float32)
+    blocks = []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            for other in (0.0, -0.0, SUBNORMAL, -SUBNORMAL):
+                dv = np.full(3, other, np.float32)
+                dv[axis] = sign
+                r = np.zeros((len(pts), 8), np.float32)
+                r[:, 0:3], r[:, 3:6], r[:, 7] = pts, dv, np.inf
+                blocks.append(r)
+    rays = np.concatenate(blocks)
+    hits, s = _trace(tmp_path, room, rays, box, tri, "axis", exhaustive=len(rays))
+    assert (hits["prim"] >= 0).all(), f"{int((hits['prim'] < 0).sum())} axis-parallel rays left the closed room"
+    assert s["lost_hits"] == 0, f"a box test lost hits on rays {s['lost_hit_rays']}"
+    n = len(pts)
+    for k in range(0, len(rays), 4 * n):  # +0 and -0 give bit-identical records
+        a, b = hits[k:k + n], hits[k + n:k + 2 * n]
+        assert (a["prim"] == b["prim"]).all() and (a["t"].view(np.int32) == b["t"].view(np.int32)).all()
+
+    # the extreme fixture (needles, zero-area and tiny triangles, vertex stars) with its golden rays
+    d = FIX / "extreme"
+    if (d / "golden" / "rays.npy").exists():
+        tris = np.load(d / "tris.npy")
+        er = load_rays(str(d / "golden/rays.npy"))
+        eh, es = _trace(tmp_path, tris, er, box, tri, "extreme", exhaustive=len(er))
+        assert es["lost_hits"] == 0 and (eh["prim"] >= -1).all()
+        assert run_check(tris, er, load_hits(str(d / "golden/hits.npy")), eh)["unexplained"] == 0
+
+    # the room at 1e+30 and 1e-30: the power-of-two normalisation keeps every option inside its range
+    dirs = np.random.default_rng(4).normal(size=(300, 3)).astype(np.float32)
+    for scale in (1e30, 1e-30):
+        t = (room.astype(np.float64) * scale).astype(np.float32)
+        l2, h2 = t.reshape(-1, 3).min(0), t.reshape(-1, 3).max(0)
+        r = np.zeros((len(dirs), 8), np.float32)
+        r[:, 0:3], r[:, 3:6], r[:, 7] = ((l2 + h2) / 2).astype(np.float32), dirs, np.inf
+        sh, ss = _trace(tmp_path, t, r, box, tri, f"scaled{scale:g}")
+        assert ss["normalize_exponent"] != 0 and (sh["prim"] >= 0).all(), f"scale {scale}: a ray left the room"
+
+    # shared edges and vertices: the watertight test leaks nothing whatever the box format
+    if tri == "watertight":
+        er = _edge_and_vertex_rays(room, _room_eyes(room, 2))
+        wh, _ = _trace(tmp_path, room, er, box, tri, "edges")
+        assert (wh["prim"] >= 0).all(), f"{int((wh['prim'] < 0).sum())} of {len(er)} rays leaked"
