@@ -1,7 +1,7 @@
 package rtaccel.area
 
 import java.nio.file.{Files, Path, Paths}
-import rtaccel.cache.hw.CacheGeometry
+import rtaccel.cache.hw.{CacheGeometry, CachePath}
 import rtaccel.config.PlatformParams
 import rtaccel.io.InputError
 
@@ -22,12 +22,13 @@ object CostModel {
   private def one(p: PlatformParams) = Seq("one" -> 1.0)
   private def once(p: PlatformParams) = 1L
   private def bits(n: Int) = 32 - Integer.numberOfLeadingZeros(math.max(1, n) - 1)
+  private val entry = rtaccel.tu.TraversalUnit.entryBits.toDouble
 
   /** The caches the MC builds for `p`, with the geometry CachePath uses. */
   def caches(p: PlatformParams): Seq[CacheGeometry] = {
     val beat = p.axiDataBits / 8
-    Seq(p.nodeCache -> (1, p.nodeStrideBytes / beat, p.nodeStrideBytes), p.primCache -> (p.mppl, p.mppl * p.primStrideBytes / beat, p.primStrideBytes))
-      .collect { case (c, (per, beats, stride)) if c.entries > 0 => CacheGeometry(c, per, beats, stride) }
+    (if (p.nodeCache.entries > 0) Seq(CachePath.nodeGeometry(p.nodeCache, p, p.nodeStrideBytes / beat)) else Nil) ++
+      (if (p.primCache.entries > 0) Seq(CachePath.primGeometry(p.primCache, p.mppl, p, p.primStrideBytes / beat)) else Nil)
   }
 
   /** Block RAM of the caches' data arrays (lines x beats deep, one beat + its error bit wide). */
@@ -38,8 +39,8 @@ object CostModel {
       val full = p.shortStack == 0
       // a TU ranks its M children with M(M-1) comparators; its stack is LUT RAM (full) or a ring + trail (short)
       Seq("one" -> 1.0, "m" -> p.m.toDouble, "m2" -> (p.m * p.m).toDouble,
-        "stack_bits" -> (if (full) p.stackDepth * 64.0 else 0.0),
-        "short_bits" -> (if (full) 0.0 else p.shortStack * (64.0 + bits(p.treeLevels + 1)) + (p.treeLevels + 1.0) * bits(p.m + 1)))
+        "stack_bits" -> (if (full) p.stackDepth * entry else 0.0),
+        "short_bits" -> (if (full) 0.0 else p.shortStack * (entry + bits(p.treeLevels + 1)) + (p.treeLevels + 1.0) * bits(p.m + 1)))
     }, _.tus.toLong),
     // the TC's own logic: ray set-up (three dividers are units of their own) and the TUs' result arbiter
     CostUnit("TraversalController", "TraversalController".r, perInstance = false, p => one(p) :+ ("tus" -> p.tus.toDouble), once),
@@ -47,8 +48,8 @@ object CostModel {
     CostUnit("IntersectionUnit", "IntersectionUnit".r, perInstance = false, p => one(p) :+ ("tus" -> p.tus.toDouble), once),
     CostUnit("BoxPipe", "BoxPipe".r, perInstance = false, p => one(p) :+ ("m" -> p.m.toDouble), once),
     CostUnit("TriPipe", "TriPipe".r, perInstance = false, one, once),
-    // three in the TC (1/d per axis), one in the triangle pipe
-    CostUnit("FpDivPipe", "FpDivPipe".r, perInstance = true, one, _ => 4L),
+    // 1/d per axis in the TC, 1/det in the triangle pipe
+    CostUnit("FpDivPipe", "FpDivPipe".r, perInstance = true, one, _ => (rtaccel.tc.TraversalController.dividers + rtaccel.iu.TriPipe.dividers).toLong),
     CostUnit("MemoryController", "MemoryController".r, perInstance = false, one, once),
     // every cache of the MC together: tags and policy state grow with lines, data RAM is block RAM
     CostUnit("CachePath", "CachePath(_[0-9]+)?".r, perInstance = false, p => {

@@ -93,6 +93,8 @@ class TriPipe(p: PlatformParams) extends Module {
 }
 
 object TriPipe {
+  /** Pipelined dividers per triangle pipe (1/det), in either TRI_TEST (the cost model counts them). */
+  val dividers: Int = 1
   /** Cycles from input to output. */
   def latency(p: PlatformParams): Int = 8 + p.divStages
 }

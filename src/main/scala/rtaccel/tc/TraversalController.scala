@@ -31,7 +31,7 @@ class TraversalController(p: PlatformParams) extends Module {
   val prepared = Module(new Queue(new TuRay(p), lat + 2))
   val inFlight = RegInit(0.U(log2Ceil(lat + 3).W))
   io.in.ready := inFlight +& prepared.io.count < (lat + 2).U
-  val divs = Seq.fill(3)(Module(new FpDivPipe(f, lat)))
+  val divs = Seq.fill(TraversalController.dividers)(Module(new FpDivPipe(f, lat)))
   for (a <- 0 until 3) {
     divs(a).io.in.valid := io.in.fire
     divs(a).io.in.bits.a := one
@@ -64,4 +64,9 @@ class TraversalController(p: PlatformParams) extends Module {
   val arb = Module(new RRArbiter(new TuResult, p.tus))
   arb.io.in <> io.tuResult
   io.out <> arb.io.out
+}
+
+object TraversalController {
+  /** 1/d per axis, one pipelined divider each (the cost model counts them). */
+  val dividers: Int = 3
 }

@@ -13,7 +13,7 @@ class ShortStack(p: PlatformParams) {
   private val cap = p.shortStack
   require(cap >= 1)
   class Entry extends Bundle {
-    val cref = UInt(32.W); val t = UInt(32.W); val level = UInt(ShortStack.levelBits(p).W)
+    val cref = UInt(TraversalUnit.refBits.W); val t = UInt(TraversalUnit.distBits.W); val level = UInt(ShortStack.levelBits(p).W)
   }
   // at least 2 rows so the address has a bit; only rows 0..cap-1 are used
   private val ring = Mem(math.max(2, cap), new Entry)

@@ -58,7 +58,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   val best = Reg(new TuResult)
   val overflow = Reg(Bool())
   val readError = Reg(Bool())
-  class Entry extends Bundle { val cref = UInt(32.W); val t = UInt(32.W) }
+  class Entry extends Bundle { val cref = UInt(TraversalUnit.refBits.W); val t = UInt(TraversalUnit.distBits.W) }
   private val short = p.shortStack > 0
   val stack = if (short) None else Some(Mem(p.stackDepth, new Entry))
   val sp = RegInit(0.U(log2Ceil(p.stackDepth + 1).W))
@@ -156,4 +156,11 @@ class TraversalUnit(p: PlatformParams) extends Module {
     io.result.bits.u := 0.U; io.result.bits.v := 0.U
   }
   when(io.result.fire) { state := S.idle }
+}
+
+object TraversalUnit {
+  /** A stack entry: a child reference and its entry distance (fp32); the cost model sizes the stacks by it. */
+  val refBits: Int = 32
+  val distBits: Int = 32
+  val entryBits: Int = refBits + distBits
 }

@@ -208,7 +208,15 @@ object CachePath {
     * pass-through. The primitive cache's lines hold one leaf of up to MPPL primitives (the paper's W x D).
     */
   def factory(node: CacheParams, prim: CacheParams, mppl: Int): (McGeometry, Int) => FetchPathModule = (g, i) =>
-    if (i == FetchPath.Node && node.entries > 0) new CachePath(g, CacheGeometry(node, 1, g.nodeBeats, g.p.nodeStrideBytes))
-    else if (i == FetchPath.Prim && prim.entries > 0) new CachePath(g, CacheGeometry(prim, mppl, mppl * g.primBeats, g.p.primStrideBytes))
+    if (i == FetchPath.Node && node.entries > 0) new CachePath(g, nodeGeometry(node, g.p, g.nodeBeats))
+    else if (i == FetchPath.Prim && prim.entries > 0) new CachePath(g, primGeometry(prim, mppl, g.p, g.primBeats))
     else new FetchPath(g)
+
+  /** A node cache line holds one node; a primitive cache line one leaf of up to MPPL primitives (also what the cost
+    * model tiles into block RAM, rtaccel.area.CostModel.caches).
+    */
+  def nodeGeometry(c: CacheParams, p: rtaccel.config.PlatformParams, nodeBeats: Int): CacheGeometry =
+    CacheGeometry(c, 1, nodeBeats, p.nodeStrideBytes)
+  def primGeometry(c: CacheParams, mppl: Int, p: rtaccel.config.PlatformParams, primBeats: Int): CacheGeometry =
+    CacheGeometry(c, mppl, mppl * primBeats, p.primStrideBytes)
 }
