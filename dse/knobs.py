@@ -60,6 +60,8 @@ KNOBS = {
     "SHORT_STACK": Knob("--short-stack", "an integer 1..64", _int(1, 64)),
     "BOX_FORMAT": Knob("--box-format", "fp32, fp24, bf16, fp16 or e<E>m<M> with E <= 8, M <= 23", _box_format),
     "TRI_TEST": Knob("--tri-test", "mt or watertight", _one_of(("mt", "watertight"))),
+    "NODE_FORMAT": Knob("--node-format", "full or q2..q16 (quantized planes, model only)",
+                        lambda v: isinstance(v, str) and re.fullmatch(r"full|q([2-9]|1[0-6])", v) is not None),
     "NODE_CACHE": Knob("--node-cache", "0 or a power of two up to 65536", _cache),
     "NODE_WAYS": Knob("--node-ways", "a power of two 1..64", lambda v: _pow2(v) and v <= 64),
     "NODE_POLICY": Knob("--node-policy", f"one of {', '.join(POLICIES)}", _one_of(POLICIES)),

@@ -41,7 +41,7 @@ final case class Mbvh(m: Int, mppl: Int, nodes: IndexedSeq[MNode], primOrder: Ar
 
 object Mbvh {
   def build(scene: Scene, p: PlatformParams): Mbvh = {
-    val nodeCost = p.nodeAccessBytes.toDouble
+    val nodeCost = p.treeNodeBytes.toDouble
     val bb = new BinaryBuilder(scene, p.mppl, p.sahBins, nodeCost, p.primAccessBytes.toDouble)
     val root = bb.build() match {
       case l: BLeaf => BInner(l.box, l, null) // the root must be a node: a one-leaf scene gets a one-child root

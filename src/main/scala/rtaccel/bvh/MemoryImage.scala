@@ -8,6 +8,8 @@ import rtaccel.scene.Scene
   * min x,y,z, max x,y,z (float bits), ref. Unused slots are all-zero (ref 0 = empty).
   * Primitive slot p occupies 64 bytes at word 16p: v0,v1,v2 (9 float bits) then the scene triangle id,
   * which the hardware returns as the hit's prim so that the host needs no table.
+  * With NODE_FORMAT=q<k> (a model-only format) the planes are the decoded quantized ones, in the same layout;
+  * the DRAM bytes of a node fetch are PlatformParams.nodeSlotBytes.
   */
 final case class MemoryImage(p: PlatformParams, nodes: Array[Int], prims: Array[Int]) {
   val codec = new RefCodec(p.refs)
@@ -27,13 +29,18 @@ object MemoryImage {
     val codec = new RefCodec(p.refs)
     val nw = p.nodeStrideBytes / 4; val pw = p.primStrideBytes / 4
     val nodes = new Array[Int](bvh.numNodes * nw)
-    for (n <- bvh.nodes; (c, j) <- n.children.zipWithIndex) {
-      val base = n.id * nw + 7 * j
-      for (a <- 0 until 3) {
-        nodes(base + a) = java.lang.Float.floatToRawIntBits(c.box.min(a))
-        nodes(base + 3 + a) = java.lang.Float.floatToRawIntBits(c.box.max(a))
+    for (n <- bvh.nodes) {
+      // NODE_FORMAT=q<k>: the model keeps the full layout but stores the planes the quantized node decodes to
+      val planes = n.children.map(c => (Array.tabulate(3)(c.box.min(_)), Array.tabulate(3)(c.box.max(_))))
+      val stored = if (p.nodeQuantBits == 0 || planes.isEmpty) planes else Quantize.boxes(Quantize.encode(planes, p.nodeQuantBits))
+      for ((c, j) <- n.children.zipWithIndex) {
+        val base = n.id * nw + 7 * j
+        for (a <- 0 until 3) {
+          nodes(base + a) = java.lang.Float.floatToRawIntBits(stored(j)._1(a))
+          nodes(base + 3 + a) = java.lang.Float.floatToRawIntBits(stored(j)._2(a))
+        }
+        nodes(base + 6) = if (c.isLeaf) codec.leaf(c.firstPrim, c.count) else codec.node(c.node, n.level + 1)
       }
-      nodes(base + 6) = if (c.isLeaf) codec.leaf(c.firstPrim, c.count) else codec.node(c.node, n.level + 1)
     }
     val prims = new Array[Int](bvh.numPrims * pw)
     for (slot <- 0 until bvh.numPrims) {

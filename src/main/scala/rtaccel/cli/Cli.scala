@@ -36,7 +36,7 @@ object Cli {
     * below what the scene needs: rays that need more are flagged overflow (see Cli.build).
     */
   def params(a: Args): PlatformParams = {
-    a.opt("node-format").foreach(Numerics.checkNodeFormat); a.opt("prim-format").foreach(Numerics.checkPrimFormat)
+    a.opt("prim-format").foreach(Numerics.checkPrimFormat)
     a.opt("tri-format").foreach(Numerics.checkTriFormat)
     val cfg = a.get("config", "fit")
     val preset = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
@@ -52,6 +52,7 @@ object Cli {
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),
       boxFormat = a.opt("box-format").map(rtaccel.fp.FpFormat.parse).getOrElse(base.boxFormat),
       triTest = a.opt("tri-test").map(TriTest.parse).getOrElse(base.triTest),
+      nodeQuantBits = a.opt("node-format").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
       nodeCache = cacheArg(a, "node", base.nodeCache), primCache = cacheArg(a, "prim", base.primCache))
   }
 
@@ -77,7 +78,7 @@ object Cli {
   def build(scene: Scene, p0: PlatformParams, fit: Boolean, stack: Option[Int] = None): Built = {
     val t0 = System.nanoTime()
     // the tree depends on the scene and these fields only (Mbvh.build); Serve keeps it between requests
-    val bvh = Memo("bvh", (new Memo.Id(scene), p0.m, p0.mppl, p0.sahBins, p0.nodeAccessBytes, p0.primAccessBytes))(Mbvh.build(scene, p0))
+    val bvh = Memo("bvh", (new Memo.Id(scene), p0.m, p0.mppl, p0.sahBins, p0.treeNodeBytes, p0.primAccessBytes))(Mbvh.build(scene, p0))
     val secs = (System.nanoTime() - t0) / 1e9
     val need = Fit.needs(bvh).stackDepth
     val p = stack match {

@@ -29,8 +29,21 @@ object Numerics {
     * test (a few ulps of the hit distance). In ulps of a format with M fraction bits: 2^(M+1-19), at least 1.
     */
   val watertightBoxSlackLog2: Int = 19
-  /** NODE_FORMAT: M children x 6 fp32 planes + reference (paper QBVH: 112 B in a 128 B slot). */
-  val nodeFormats: Seq[String] = Seq("full")
+  /** NODE_FORMAT: full = M children x 6 fp32 planes + reference (paper QBVH: 112 B in a 128 B slot); q<k> = k-bit
+    * planes on a per-node origin and power-of-two scale (bvh.Quantize), in the model; 0 bits means full.
+    */
+  private val Q = """q(\d+)""".r
+  def parseNodeFormat(v: String): Int = v.toLowerCase match {
+    case "full" => 0
+    case Q(k) if k.toInt >= 2 && k.toInt <= 16 => k.toInt
+    case Q(k) => throw new InputError(s"NODE_FORMAT=$v: a quantized plane takes 2..16 bits (the node layout's field), not $k")
+    case _ => throw new InputError(s"NODE_FORMAT=$v is not a node format; use full or q<bits> (q2..q16, e.g. q8)")
+  }
+  def nodeFormatName(bits: Int): String = if (bits == 0) "full" else s"q$bits"
+  /** Refuses configurations the RTL does not build yet (verilog, simulate, area), naming the commands that model them. */
+  def checkRtl(p: PlatformParams): Unit =
+    if (p.nodeQuantBits != 0) throw new InputError(s"NODE_FORMAT=${nodeFormatName(p.nodeQuantBits)} is modelled by trace, " +
+      "cachesim, check, analyze and precision only: the IU's plane decoder is not built; use NODE_FORMAT=full for verilog, simulate and area")
   /** PRIM_FORMAT: 9 fp32 coordinates + triangle id in a 64 B slot. */
   val primFormats: Seq[String] = Seq("slot64")
   /** TRI_FORMAT: the triangle arithmetic. */
@@ -40,11 +53,10 @@ object Numerics {
     if (!built.contains(v.toLowerCase))
       throw new InputError(s"$knob=$v is not built in this version; it supports $knob=${built.mkString(" | ")}")
 
-  def checkNodeFormat(v: String): Unit = only("NODE_FORMAT", v, nodeFormats)
   def checkPrimFormat(v: String): Unit = only("PRIM_FORMAT", v, primFormats)
   def checkTriFormat(v: String): Unit = only("TRI_FORMAT", v, triFormats.map(_.name))
 
   def json(p: PlatformParams): ujson.Obj = ujson.Obj(
-    "box_format" -> p.boxFormat.name, "node_format" -> nodeFormats.head, "prim_format" -> primFormats.head,
+    "box_format" -> p.boxFormat.name, "node_format" -> nodeFormatName(p.nodeQuantBits), "prim_format" -> primFormats.head,
     "tri_test" -> p.triTest.name, "tri_format" -> triFormats.head.name)
 }

@@ -84,8 +84,11 @@ final case class PlatformParams(
   shortStack: Int = 0, // > 0: a ring of that many entries with restart instead of the full stack
   treeLevels: Int = 64, // node levels a TU can walk: the short stack keeps one trail counter per level
   boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // arithmetic of the slab test; narrower ones round outward
-  triTest: TriTest = TriTest.Mt // the ray-triangle test (Numerics: the formats every JSON line names)
+  triTest: TriTest = TriTest.Mt, // the ray-triangle test (Numerics: the formats every JSON line names)
+  nodeQuantBits: Int = 0 // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (model only, bvh.Quantize)
 ) {
+  require(nodeQuantBits == 0 || (nodeQuantBits >= 2 && nodeQuantBits <= 16),
+    s"NODE_FORMAT=q$nodeQuantBits: a quantized plane takes 2..16 bits (the 16-bit field of the node layout)")
   require(rtaccel.fp.FpFormat.fp32.holds(boxFormat),
     s"BOX_FORMAT=${boxFormat.name} is wider than fp32 in exponent or fraction; the box test takes fp32 inputs, so use a format within e8m23")
   require(shortStack >= 0 && shortStack <= 64, s"SHORT_STACK must be 0 (full stack) or 1..64 entries (got $shortStack)")
@@ -112,9 +115,17 @@ final case class PlatformParams(
   /** A primitive is 9 floats (288 bits); its 64-byte slot also carries the original triangle id. */
   val primBits: Int = 9 * 32
   val primStrideBytes: Int = 64
+  /** Bytes a node occupies in NODE_FORMAT: the full node's slot, or the quantized node (bvh.Quantize) rounded up to
+    * a power of two (M=4, q8: 64 B).
+    */
+  val nodeSlotBytes: Int = if (nodeQuantBits == 0) nodeStrideBytes
+    else Integer.highestOneBit(math.max(1, (rtaccel.bvh.Quantize.nodeBits(m, nodeQuantBits) + 7) / 8 - 1)) << 1
   /** Bytes one node fetch moves (paper: 128 B for QBVH); defaults to the node's stored size. */
-  val nodeAccessBytes: Int = if (nodeAccessBytesOverride > 0) nodeAccessBytesOverride else nodeStrideBytes
-  require(nodeAccessBytes >= nodeBits / 8, s"node access of $nodeAccessBytes B is smaller than a node (${nodeBits / 8} B); raise the node access size")
+  val nodeAccessBytes: Int = if (nodeAccessBytesOverride > 0) nodeAccessBytesOverride else nodeSlotBytes
+  /** The node cost the tree builder's SAH weighs: the full node's, so that NODE_FORMAT changes the boxes, not the tree. */
+  val treeNodeBytes: Int = if (nodeAccessBytesOverride > 0) nodeAccessBytesOverride else nodeStrideBytes
+  require(nodeAccessBytes >= (if (nodeQuantBits == 0) nodeBits / 8 else nodeSlotBytes / 2 + 1),
+    s"node access of $nodeAccessBytes B is smaller than a node ($nodeSlotBytes B slot); raise the node access size")
   /** Ulps of the box format added to every box's exit distance (tfar) before the hit comparison: none for
     * Möller–Trumbore (the paper's test, bit-exact as before); with the watertight test at least
     * Numerics.watertightBoxSlack relative, so that no box loses a hit the triangle test would find

@@ -192,6 +192,7 @@ object CachePath {
   /** Refuses cache configurations the RTL cannot build, with what to change (InputError: one `error:` line). */
   def validate(p: rtaccel.config.PlatformParams): Unit = {
     def fail(msg: String) = throw new rtaccel.io.InputError(msg)
+    rtaccel.config.Numerics.checkRtl(p)
     rtaccel.config.Fit.checkLevelField(p)
     for ((what, c) <- Seq("NODE" -> p.nodeCache, "PRIM" -> p.primCache) if c.entries > 0) {
       val pol = try Policies.of(c.policy, c.ways) catch { case e: IllegalArgumentException => fail(s"${what}_POLICY: ${e.getMessage.stripPrefix("requirement failed: ")}") }
