@@ -28,9 +28,10 @@ from .common import provenance_line, save_png, write_text
 from .worker import JvmServer
 
 DEFAULT_OPTIONS = ["fp32:mt", "fp24:mt", "fp16:mt", "bf16:mt", "fp32:watertight", "fp24:watertight",
-                   "fp16:watertight", "bf16:watertight", "fp32:mt:q8", "fp32:mt:q12", "bf16:watertight:q8"]
+                   "fp16:watertight", "bf16:watertight", "fp32:mt:q8", "fp32:mt:q12", "fp32:mt:full:packed",
+                   "fp32:mt:q8:packed", "bf16:watertight:q8:packed"]
 BASELINE = "fp32:mt"
-COLUMNS = ["option", "box_format", "tri_test", "node_format", "rays", "agree", "classified", "unexplained", "max_rel_t_err",
+COLUMNS = ["option", "box_format", "tri_test", "node_format", "prim_format", "rays", "agree", "classified", "unexplained", "max_rel_t_err",
            "differ_from_baseline", "differ_classes", "exhaustive_rays", "lost_hits",
            "node_fetches_per_ray", "box_tests_per_ray", "prim_tests_per_ray",
            "node_bytes_per_ray", "prim_bytes_per_ray", "node_bytes_per_ray_nocache", "prim_bytes_per_ray_nocache",
@@ -41,16 +42,17 @@ def parse_options(text):
     out = []
     for item in text.replace(",", " ").split():
         parts = item.split(":")
-        if len(parts) not in (2, 3) or not parts[0] or parts[1] not in ("mt", "watertight") or (len(parts) == 3 and not parts[2]):
-            raise UserError(f"--options: '{item}' is not BOX_FORMAT:TRI_TEST[:NODE_FORMAT] (e.g. fp32:mt, bf16:watertight:q8)")
-        out.append((parts[0], parts[1], parts[2] if len(parts) == 3 else "full"))
+        if len(parts) not in (2, 3, 4) or not all(parts) or parts[1] not in ("mt", "watertight"):
+            raise UserError(f"--options: '{item}' is not BOX_FORMAT:TRI_TEST[:NODE_FORMAT[:PRIM_FORMAT]] "
+                            "(e.g. fp32:mt, bf16:watertight:q8, fp32:mt:full:packed)")
+        out.append((parts[0], parts[1], parts[2] if len(parts) > 2 else "full", parts[3] if len(parts) > 3 else "slot64"))
     if not out:
         raise UserError("--options is empty; give e.g. 'fp32:mt bf16:watertight'")
     return out
 
 
-def name_of(box, tri, node):
-    return f"{box}:{tri}" + ("" if node == "full" else f":{node}")
+def name_of(box, tri, node, prim):
+    return f"{box}:{tri}" + ("" if node == "full" and prim == "slot64" else f":{node}") + ("" if prim == "slot64" else f":{prim}")
 
 
 def ask(jvm, cmd, args):
@@ -80,7 +82,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     opts = parse_options(a.options)
     if BASELINE not in {name_of(*o) for o in opts}:
-        opts = [tuple(BASELINE.split(":")) + ("full",)] + opts
+        opts = [tuple(BASELINE.split(":")) + ("full", "slot64")] + opts
     if a.exhaustive < 0:
         raise UserError("--exhaustive must be >= 0")
     tris = load_tris(a.tris)
@@ -92,9 +94,10 @@ def main(argv=None):
     jvm = JvmServer(a.java, os.path.join(a.out, "jvm.log"))
     rows, hits_of, made = [], {}, None
     try:
-        for i, (box, tri, node) in enumerate(opts):
-            name = name_of(box, tri, node)
-            numerics = ["--box-format", box, "--tri-test", tri, "--node-format", node]
+        for i, (box, tri, node, prim) in enumerate(opts):
+            name = name_of(box, tri, node, prim)
+            numerics = ["--box-format", box, "--tri-test", tri, "--node-format", node, "--prim-format", prim]
+            built = node == "full" and prim == "slot64"  # the formats the RTL builds
             d = os.path.join(a.out, name.replace(":", "-"))
             print(f"[precision] {i + 1}/{len(opts)} {name}: trace", flush=True)
             tr = ask(jvm, "trace", common + numerics + ["--out", d, "--access-trace", "0", "--exhaustive", a.exhaustive])
@@ -106,12 +109,12 @@ def main(argv=None):
             hits_of[name] = hits
             res = classify(tris, rays, golden, hits)
             n = max(1, t["rays"])
-            row = {"option": name, "box_format": box, "tri_test": tri, "node_format": node, "rays": t["rays"], "agree": res["agree"],
+            row = {"option": name, "box_format": box, "tri_test": tri, "node_format": node, "prim_format": prim, "rays": t["rays"], "agree": res["agree"],
                    "classified": sum(res["classified"].values()), "unexplained": res["unexplained"],
                    "max_rel_t_err": res["max_rel_t_err"], "exhaustive_rays": t.get("exhaustive_rays", 0),
                    "lost_hits": t.get("lost_hits", ""), "node_fetches_per_ray": t["node_fetches"] / n,
                    "box_tests_per_ray": t["box_tests"] / n, "prim_tests_per_ray": t["prim_tests"] / n, "failure": "",
-                   "note": "" if node == "full" else "quantized nodes are modelled only: no RTL, no synthesis"}
+                   "note": "" if built else "a format modelled only: no RTL, no synthesis"}
             print(f"[precision] {i + 1}/{len(opts)} {name}: cachesim", flush=True)
             cs = ask(jvm, "cachesim", common + numerics)
             if cs["status"] != 0:
@@ -121,7 +124,7 @@ def main(argv=None):
                                           "prim_bytes_per_ray_nocache")})
             row["node_miss_rate"] = c["node_cache"]["miss_rate"] if c["node_cache"]["entries"] else ""
             row.update({"rtl_rays_per_s": "", "rtl_ok": "", "iu_lut": "", "iu_ff": "", "iu_dsp": "", "iu_bram36": ""})
-            if a.rtl and node == "full":
+            if a.rtl and built:
                 print(f"[precision] {i + 1}/{len(opts)} {name}: RTL", flush=True)
                 sm = ask(jvm, "simulate", common + numerics + ["--out", d + "-rtl", "--work", os.path.join("build", "sim-precision")])
                 r = sm.get("result") or {}
@@ -129,7 +132,7 @@ def main(argv=None):
                 row["rtl_rays_per_s"] = r.get("rays_per_s_at_clock", "")
                 if not row["rtl_ok"]:
                     row["failure"] = f"RTL: {sm.get('error') or r.get('failures')}"
-            if a.area == "yosys" and node == "full":
+            if a.area == "yosys" and built:
                 print(f"[precision] {i + 1}/{len(opts)} {name}: synthesis of the IU", flush=True)
                 # a circuit has fixed field widths: CONFIG=fit synthesizes its preset, as make verilog does
                 vknobs = ["paper2017" if k > 0 and knobs[k - 1] == "--config" and v == "fit" else v for k, v in enumerate(knobs)]

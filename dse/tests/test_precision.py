@@ -31,26 +31,30 @@ def test_precision_table_on_the_hairball(tmp_path, capsys):
     out = tmp_path / "out"
     rc = precision.main(["--scene", "hairball", "--tris", str(d / "tris.npy"), "--golden", str(d / "golden"),
                          "--out", str(out), "--java", _java(), "--knobs", "--config fit --tus 4 --node-cache 256",
-                         "--options", "bf16:mt e8m3:watertight fp32:mt:q4", "--exhaustive", "200", "--rtl", "0"])
+                         "--options", "bf16:mt e8m3:watertight fp32:mt:q4 fp32:mt:full:packed", "--exhaustive", "200", "--rtl", "0"])
     j = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
     assert rc == 0 and j["failed"] == []
     # the fp32 Möller–Trumbore baseline is always measured, first
-    assert j["options"] == ["fp32:mt", "bf16:mt", "e8m3:watertight", "fp32:mt:q4"]
+    assert j["options"] == ["fp32:mt", "bf16:mt", "e8m3:watertight", "fp32:mt:q4", "fp32:mt:full:packed"]
     lines = (out / "precision.csv").read_text().splitlines()
     prov = parse_provenance(lines[0])
     assert prov["scene"] == "hairball" and prov["tus"] == "4" and prov["node-cache"] == "256" and "rtaccel" in prov
     rows = {r["option"]: r for r in csv.DictReader(lines[1:])}
     assert list(rows) == j["options"] and set(precision.COLUMNS) == set(rows["fp32:mt"])
-    base, bf, e3, q4 = rows["fp32:mt"], rows["bf16:mt"], rows["e8m3:watertight"], rows["fp32:mt:q4"]
+    base, bf, e3, q4, pk = (rows[o] for o in j["options"])
     assert int(base["differ_from_baseline"]) == 0 and base["differ_classes"] == ""
     # conservative boxes (and the watertight slack) lose nothing; looser boxes cost more work
     assert int(bf["lost_hits"]) == 0 and int(e3["lost_hits"]) == 0 and int(bf["exhaustive_rays"]) == 200
     # 4-bit quantized nodes: looser boxes (more work), half the bytes per node fetch, nothing lost; modelled only
-    assert int(q4["lost_hits"]) == 0 and q4["node_format"] == "q4" and "modelled only" in q4["note"]
+    assert int(q4["lost_hits"]) == 0 and q4["node_format"] == "q4" and "modelled only" in q4["note"] and "modelled only" in pk["note"]
     assert float(q4["node_fetches_per_ray"]) >= float(base["node_fetches_per_ray"])
     # (the CSV keeps 6 significant digits)
     assert float(q4["node_bytes_per_ray_nocache"]) / float(q4["node_fetches_per_ray"]) == pytest.approx(64, rel=1e-4)
     assert float(base["node_bytes_per_ray_nocache"]) / float(base["node_fetches_per_ray"]) == pytest.approx(128, rel=1e-4)
+    # packed leaves: the same work and hits, fewer primitive bytes (40 B records, beat-aligned per leaf)
+    assert pk["prim_format"] == "packed" and int(pk["differ_from_baseline"]) == 0
+    assert pk["prim_tests_per_ray"] == base["prim_tests_per_ray"]
+    assert 40 / 64 <= float(pk["prim_bytes_per_ray_nocache"]) / float(base["prim_bytes_per_ray_nocache"]) < 1
     assert float(e3["node_fetches_per_ray"]) > float(bf["node_fetches_per_ray"]) >= float(base["node_fetches_per_ray"])
     assert float(e3["prim_bytes_per_ray"]) > float(base["prim_bytes_per_ray"])
     # with a node cache its bytes are below the uncached ones; no RTL run, no synthesis: empty, not invented
@@ -61,7 +65,7 @@ def test_precision_table_on_the_hairball(tmp_path, capsys):
     assert (out / "precision.png").stat().st_size > 0
 
 
-@pytest.mark.parametrize("bad", ["fp32", "fp32:xx", ":mt", "", "fp32:mt:", "a:mt:q8:x"])
+@pytest.mark.parametrize("bad", ["fp32", "fp32:xx", ":mt", "", "fp32:mt:", "a:mt:q8:slot64:x"])
 def test_bad_options_are_refused_with_the_format(bad):
     with pytest.raises(UserError, match="BOX_FORMAT:TRI_TEST|empty"):
         precision.parse_options(bad)

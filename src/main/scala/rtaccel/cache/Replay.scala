@@ -4,13 +4,15 @@ import rtaccel.model.AccessSink
 
 /** Node and primitive caches in front of DRAM, fed with traversal accesses. Either may be absent (None).
   * Counts the DRAM traffic left after the caches: a node miss moves `nodeBytes`, a leaf miss moves
-  * count x `primBytes` (the leaf's primitives), as in make trace's bytes per ray.
+  * `leafBytes(count)` (the leaf's primitives, PlatformParams.leafBytes), as in make trace's bytes per ray.
   */
-final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[CacheModel], nodeBytes: Int, primBytes: Int)
+final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[CacheModel], nodeBytes: Int, leafBytes: Int => Long)
     extends AccessSink {
   var nodeAccesses = 0L; var leafAccesses = 0L
   var nodeDramBytes = 0L; var primDramBytes = 0L
   var primTests = 0L
+  /** Primitive bytes of every leaf access, cached or not (what DRAM would move without the primitive cache). */
+  var primBytesAll = 0L
   def node(ray: Int, id: Int, level: Int): Unit = {
     nodeAccesses += 1
     val hit = nodeCache match { case Some(c) => c.access(id, level); case None => false }
@@ -18,8 +20,9 @@ final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[C
   }
   def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = {
     leafAccesses += 1; primTests += count
+    val bytes = leafBytes(count); primBytesAll += bytes
     val hit = primCache match { case Some(c) => c.access(firstPrim, level); case None => false }
-    if (!hit) primDramBytes += count.toLong * primBytes
+    if (!hit) primDramBytes += bytes
   }
 }
 
@@ -30,7 +33,7 @@ object CacheSink {
   def apply(p: rtaccel.config.PlatformParams): CacheSink = new CacheSink(
     if (p.nodeCache.entries > 0) Some(new CacheModel(p.nodeCache, code(p))) else None,
     if (p.primCache.entries > 0) Some(new CacheModel(p.primCache, code(p), identity, p.mppl)) else None,
-    p.nodeAccessBytes, p.primAccessBytes)
+    p.nodeAccessBytes, p.leafBytes)
   /** the level code the platform's caches use */
   def code(p: rtaccel.config.PlatformParams): rtaccel.cache.policy.LevelPolicy.Code = rtaccel.cache.policy.LevelPolicy.Code(p.hw.levelCodeBits)
 }

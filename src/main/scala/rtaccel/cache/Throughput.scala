@@ -39,12 +39,12 @@ object Throughput {
     val lat = p.memory.latencyCycles.toDouble
     val nodeMisses = s.nodeDramBytes / p.nodeAccessBytes.toDouble
     val leafMisses = s.primCache.fold(s.leafAccesses.toDouble)(_.misses.toDouble)
-    val hitBytes = (s.nodeAccesses * p.nodeAccessBytes - s.nodeDramBytes) + (s.primTests * p.primAccessBytes - s.primDramBytes)
+    val hitBytes = (s.nodeAccesses * p.nodeAccessBytes - s.nodeDramBytes) + (s.primBytesAll - s.primDramBytes)
     val cachePathCycles = p.hw.cachePathCycles
     val overhead = s.nodeCache.fold(0.0)(_ => cachePathCycles) * s.nodeAccesses + s.primCache.fold(0.0)(_ => cachePathCycles) * s.leafAccesses
     val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n
     val dram = (s.nodeDramBytes + s.primDramBytes) / bpc / n
-    val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primTests * p.primAccessBytes) / beatBytes / n
+    val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primBytesAll) / beatBytes / n
     Prediction(latency, dram, beats, mva(math.max(0.0, latency - dram - beats), Seq(dram, beats), tus))
   }
 }

@@ -11,6 +11,8 @@ object Analyze {
     val out = a.path("out")
     val (scene, rays, _) = Cli.inputs(a)
     val base = Cli.params(a)
+    if (base.primPacked) throw new rtaccel.io.InputError("PRIM_FORMAT=packed: make analyze counts primitive slots per access " +
+      "(the paper's Fig 4); its packed bytes come from make trace or make cachesim")
     val mppls = a.get("mppls", "1,2,4,8,16").split(",").map(_.trim.toInt).toSeq
     val label = a.get("scene-label", a.need("tris"))
     val levelMppl = base.mppl

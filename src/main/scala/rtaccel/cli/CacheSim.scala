@@ -59,7 +59,7 @@ object CacheSim {
       case None => ujson.Obj("entries" -> 0, "hits" -> 0, "misses" -> 0, "bypasses" -> 0, "miss_rate" -> 1.0)
     }
     val nodeBpr = sink.nodeDramBytes / n; val primBpr = sink.primDramBytes / n
-    val nodeBprNoCache = sink.nodeAccesses * p.nodeAccessBytes / n; val primBprNoCache = sink.primTests * p.primAccessBytes / n
+    val nodeBprNoCache = sink.nodeAccesses * p.nodeAccessBytes / n; val primBprNoCache = sink.primBytesAll / n
     val sustained = p.memory.bytesPerSecond * p.memory.sustainedEfficiency // = clock x sustained bytes per cycle
     def bound(bpr: Double): Double = if (bpr > 0) sustained / bpr else Double.PositiveInfinity
     a.opt("sweep-out").foreach(out => sweep(rows, java.nio.file.Paths.get(out), tus, CacheSink.code(p)))

@@ -36,7 +36,6 @@ object Cli {
     * below what the scene needs: rays that need more are flagged overflow (see Cli.build).
     */
   def params(a: Args): PlatformParams = {
-    a.opt("prim-format").foreach(Numerics.checkPrimFormat)
     a.opt("tri-format").foreach(Numerics.checkTriFormat)
     val cfg = a.get("config", "fit")
     val preset = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
@@ -53,6 +52,7 @@ object Cli {
       boxFormat = a.opt("box-format").map(rtaccel.fp.FpFormat.parse).getOrElse(base.boxFormat),
       triTest = a.opt("tri-test").map(TriTest.parse).getOrElse(base.triTest),
       nodeQuantBits = a.opt("node-format").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
+      primPacked = a.opt("prim-format").map(Numerics.parsePrimFormat).getOrElse(base.primPacked),
       nodeCache = cacheArg(a, "node", base.nodeCache), primCache = cacheArg(a, "prim", base.primCache))
   }
 

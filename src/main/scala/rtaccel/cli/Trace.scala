@@ -33,7 +33,7 @@ object Trace {
       "stack_depth" -> p.stackDepth, "normalize_exponent" -> scaleExp, "rays" -> rays.count, "hits" -> hits.prim.count(_ >= 0),
       "node_fetches" -> st.nodeFetches.toDouble, "leaf_fetches" -> st.leafFetches.toDouble, "prim_tests" -> st.primTests.toDouble, "box_tests" -> st.boxTests.toDouble,
       "node_bytes_per_ray" -> st.nodeFetches * p.nodeAccessBytes / n,
-      "prim_bytes_per_ray" -> st.primTests * p.primAccessBytes / n,
+      "prim_bytes_per_ray" -> st.primBytes / n,
       "max_stack" -> st.maxStack, "stack_overflow_rays" -> st.overflows, "overflowed" -> st.overflows,
       "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "restarts" -> st.restarts.toDouble,
       "build_s" -> b.buildSeconds, "trace_s" -> secs, "rays_per_s" -> rays.count / math.max(secs, 1e-9))

@@ -39,13 +39,25 @@ object Numerics {
     case Q(k) => throw new InputError(s"NODE_FORMAT=$v: a quantized plane takes 2..16 bits (the node layout's field), not $k")
     case _ => throw new InputError(s"NODE_FORMAT=$v is not a node format; use full or q<bits> (q2..q16, e.g. q8)")
   }
+  def parsePrimFormat(v: String): Boolean = v.toLowerCase match {
+    case "slot64" => false
+    case "packed" => true
+    case _ => throw new InputError(s"PRIM_FORMAT=$v is not a primitive format; use ${primFormats.mkString(" or ")}")
+  }
   def nodeFormatName(bits: Int): String = if (bits == 0) "full" else s"q$bits"
   /** Refuses configurations the RTL does not build yet (verilog, simulate, area), naming the commands that model them. */
   def checkRtl(p: PlatformParams): Unit =
+  {
     if (p.nodeQuantBits != 0) throw new InputError(s"NODE_FORMAT=${nodeFormatName(p.nodeQuantBits)} is modelled by trace, " +
       "cachesim, check, analyze and precision only: the IU's plane decoder is not built; use NODE_FORMAT=full for verilog, simulate and area")
-  /** PRIM_FORMAT: 9 fp32 coordinates + triangle id in a 64 B slot. */
-  val primFormats: Seq[String] = Seq("slot64")
+    if (p.primPacked) throw new InputError("PRIM_FORMAT=packed is modelled by trace, cachesim, check and precision only: the IU's " +
+      "record assembly across beats is not built; use PRIM_FORMAT=slot64 for verilog, simulate and area")
+  }
+  /** PRIM_FORMAT: slot64 = 9 fp32 coordinates + triangle id in a 64 B slot; packed = the same 40 B records back to
+    * back, beat-aligned per leaf (PlatformParams.leafBytes), in the model.
+    */
+  val primFormats: Seq[String] = Seq("slot64", "packed")
+  val packedPrimBytes: Int = 40
   /** TRI_FORMAT: the triangle arithmetic. */
   val triFormats: Seq[rtaccel.fp.FpFormat] = Seq(rtaccel.fp.FpFormat.fp32)
 
@@ -53,10 +65,9 @@ object Numerics {
     if (!built.contains(v.toLowerCase))
       throw new InputError(s"$knob=$v is not built in this version; it supports $knob=${built.mkString(" | ")}")
 
-  def checkPrimFormat(v: String): Unit = only("PRIM_FORMAT", v, primFormats)
   def checkTriFormat(v: String): Unit = only("TRI_FORMAT", v, triFormats.map(_.name))
 
   def json(p: PlatformParams): ujson.Obj = ujson.Obj(
-    "box_format" -> p.boxFormat.name, "node_format" -> nodeFormatName(p.nodeQuantBits), "prim_format" -> primFormats.head,
+    "box_format" -> p.boxFormat.name, "node_format" -> nodeFormatName(p.nodeQuantBits), "prim_format" -> (if (p.primPacked) "packed" else "slot64"),
     "tri_test" -> p.triTest.name, "tri_format" -> triFormats.head.name)
 }

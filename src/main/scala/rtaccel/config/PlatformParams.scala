@@ -85,7 +85,8 @@ final case class PlatformParams(
   treeLevels: Int = 64, // node levels a TU can walk: the short stack keeps one trail counter per level
   boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // arithmetic of the slab test; narrower ones round outward
   triTest: TriTest = TriTest.Mt, // the ray-triangle test (Numerics: the formats every JSON line names)
-  nodeQuantBits: Int = 0 // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (model only, bvh.Quantize)
+  nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (model only, bvh.Quantize)
+  primPacked: Boolean = false // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (model only)
 ) {
   require(nodeQuantBits == 0 || (nodeQuantBits >= 2 && nodeQuantBits <= 16),
     s"NODE_FORMAT=q$nodeQuantBits: a quantized plane takes 2..16 bits (the 16-bit field of the node layout)")
@@ -120,6 +121,12 @@ final case class PlatformParams(
     */
   val nodeSlotBytes: Int = if (nodeQuantBits == 0) nodeStrideBytes
     else Integer.highestOneBit(math.max(1, (rtaccel.bvh.Quantize.nodeBits(m, nodeQuantBits) + 7) / 8 - 1)) << 1
+  /** DRAM bytes of a leaf of `count` primitives: count 64 B slots, or with PRIM_FORMAT=packed the 40 B records
+    * (9 floats + id) back to back, rounded up to whole memory beats per leaf (M=4 MPPL=4 on 256-bit beats: 160 B).
+    */
+  def leafBytes(count: Int): Long =
+    if (!primPacked) count.toLong * primAccessBytes
+    else { val beat = axiDataBits / 8; (count.toLong * Numerics.packedPrimBytes + beat - 1) / beat * beat }
   /** Bytes one node fetch moves (paper: 128 B for QBVH); defaults to the node's stored size. */
   val nodeAccessBytes: Int = if (nodeAccessBytesOverride > 0) nodeAccessBytesOverride else nodeSlotBytes
   /** The node cost the tree builder's SAH weighs: the full node's, so that NODE_FORMAT changes the boxes, not the tree. */

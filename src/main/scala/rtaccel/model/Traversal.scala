@@ -7,6 +7,7 @@ import rtaccel.scene.{Hits, Rays}
 final class RayStats {
   var nodeFetches = 0L; var leafFetches = 0L; var primTests = 0L; var boxTests = 0L
   var maxStack = 0; var overflows = 0; var readErrors = 0; var restarts = 0L
+  var primBytes = 0L // DRAM bytes of the leaves fetched (PlatformParams.leafBytes)
 }
 
 /** Reference traversal of one TU over the packed memory image (paper Section 2), defining the order the
@@ -166,7 +167,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     */
   private def testLeaf(i: Int, r: PreparedRay, ref: Int, level: Int, tmax0: Float, sink: AccessSink, st: RayStats): Float = {
     val first = codec.firstPrim(ref); val n = codec.count(ref)
-    sink.leaf(i, first, n, level); st.leafFetches += 1
+    sink.leaf(i, first, n, level); st.leafFetches += 1; st.primBytes += p.leafBytes(n)
     var tmax = tmax0
     var s = first
     while (s < first + n) {

@@ -139,7 +139,7 @@ class CacheModelSpec extends AnyFunSuite {
   }
   private def run(c: CacheParams, tus: Int = 1): CacheModel = {
     val m = new CacheModel(c, LevelPolicy.paper)
-    Replay.interleaved(sceneTrace._1, tus, new CacheSink(Some(m), None, 128, 64))
+    Replay.interleaved(sceneTrace._1, tus, new CacheSink(Some(m), None, 128, c => c * 64L))
     m
   }
 

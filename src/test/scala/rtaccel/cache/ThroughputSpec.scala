@@ -19,7 +19,7 @@ class ThroughputSpec extends AnyFunSuite {
   test("latency and demands from the replay: uncached stream by hand, and a cache adds its path latency") {
     val p = Presets.paper2017 // 128 B nodes, 64 B primitives, 40 cycles latency, 4 B/cycle sustained, 32 B beats
     def sink(cached: Boolean) = {
-      val s = new CacheSink(if (cached) Some(new CacheModel(CacheParams(8, 1, CachePolicy.Dm), LevelPolicy.paper)) else None, None, 128, 64)
+      val s = new CacheSink(if (cached) Some(new CacheModel(CacheParams(8, 1, CachePolicy.Dm), LevelPolicy.paper)) else None, None, 128, c => c * 64L)
       for (r <- 0 until 2) { s.node(r, 0, 0); s.node(r, 1, 1); s.leaf(r, 0, 3, 2) } // 2 rays: 2 nodes + a 3-prim leaf each
       s
     }

@@ -1,0 +1,28 @@
+package rtaccel.config
+
+import org.scalatest.funsuite.AnyFunSuite
+import rtaccel.io.InputError
+
+/** The numerics knobs' values, names and refusals; PRIM_FORMAT's bytes per leaf. */
+class NumericsSpec extends AnyFunSuite {
+  test("PRIM_FORMAT: 64 B slots, or 40 B records beat-aligned per leaf") {
+    val slot = PlatformParams(); val packed = slot.copy(primPacked = true)
+    assert((1 to 16).forall(n => slot.leafBytes(n) == 64L * n))
+    assert(Seq(1, 2, 3, 4, 8, 16).map(packed.leafBytes) == Seq(64L, 96L, 128L, 160L, 320L, 640L)) // 256-bit beats
+    assert(packed.copy(axiDataBits = 64).leafBytes(3) == 120L && packed.copy(axiDataBits = 512).leafBytes(4) == 192L)
+    assert(Numerics.parsePrimFormat("packed") && !Numerics.parsePrimFormat("slot64"))
+    assert(intercept[InputError](Numerics.parsePrimFormat("slot32")).getMessage.contains("slot64 or packed"))
+    assert(intercept[InputError](Numerics.checkRtl(packed)).getMessage.contains("PRIM_FORMAT=slot64"))
+  }
+
+  test("every JSON line's numerics name the five knobs; TRI_FORMAT and TRI_TEST refusals name what exists") {
+    val j = Numerics.json(PlatformParams(triTest = TriTest.Watertight, nodeQuantBits = 8, primPacked = true,
+      boxFormat = rtaccel.fp.FpFormat.parse("bf16")))
+    assert(j.obj.keys.toSet == Set("box_format", "node_format", "prim_format", "tri_test", "tri_format"))
+    assert(j("box_format").str == "bf16" && j("node_format").str == "q8" && j("prim_format").str == "packed" &&
+      j("tri_test").str == "watertight" && j("tri_format").str == "fp32")
+    assert(intercept[InputError](Numerics.checkTriFormat("fp64")).getMessage.contains("TRI_FORMAT=fp32"))
+    assert(intercept[InputError](TriTest.parse("pluecker")).getMessage.contains("mt or watertight"))
+    Numerics.checkRtl(PlatformParams(triTest = TriTest.Watertight)) // built in RTL: no refusal
+  }
+}
