@@ -2,7 +2,8 @@
 
 One row per option (BOX_FORMAT x TRI_TEST, docs/numerics.md "The trade, measured"), all from the same golden rays:
   accuracy   agreement with Embree as `make check` classifies it; hits that differ from the fp32 Möller–Trumbore
-             baseline and the classes of those differences; hits a box test lost (the traversal against every
+             baseline (another primitive, or the same with other t bits; the largest relative t difference) and
+             the classes of those differences; hits a box test lost (the traversal against every
              triangle with the same triangle test and no boxes, on the first EXHAUSTIVE rays; 0 for conservative
              boxes); max relative t error against Embree;
   work       node fetches, box tests, primitive tests per ray (the reference traversal);
@@ -32,7 +33,7 @@ DEFAULT_OPTIONS = ["fp32:mt", "fp24:mt", "fp16:mt", "bf16:mt", "fp32:watertight"
                    "fp32:mt:q8:packed", "bf16:watertight:q8:packed"]
 BASELINE = "fp32:mt"
 COLUMNS = ["option", "box_format", "tri_test", "node_format", "prim_format", "rays", "agree", "classified", "unexplained", "max_rel_t_err",
-           "differ_from_baseline", "differ_classes", "exhaustive_rays", "lost_hits",
+           "differ_from_baseline", "prim_differs_from_baseline", "max_rel_t_vs_baseline", "differ_classes", "exhaustive_rays", "lost_hits",
            "node_fetches_per_ray", "box_tests_per_ray", "prim_tests_per_ray",
            "node_bytes_per_ray", "prim_bytes_per_ray", "node_bytes_per_ray_nocache", "prim_bytes_per_ray_nocache",
            "node_miss_rate", "rtl_rays_per_s", "rtl_ok", "iu_lut", "iu_ff", "iu_dsp", "iu_bram36", "failure", "note"]
@@ -150,8 +151,13 @@ def main(argv=None):
     base = hits_of[BASELINE]
     for row in rows:
         h = hits_of[row["option"]]
-        same = (h["prim"] == base["prim"]) & (h["t"].view(np.int32) == base["t"].view(np.int32))
-        row["differ_from_baseline"] = int((~same).sum())
+        same_prim = h["prim"] == base["prim"]
+        same = same_prim & (h["t"].view(np.int32) == base["t"].view(np.int32))
+        row["differ_from_baseline"] = int((~same).sum())  # a different primitive or other t bits
+        row["prim_differs_from_baseline"] = int((~same_prim).sum())
+        both = same_prim & (base["prim"] >= 0)
+        rel = np.abs(h["t"][both].astype(np.float64) - base["t"][both]) / np.maximum(np.abs(base["t"][both].astype(np.float64)), 1e-30)
+        row["max_rel_t_vs_baseline"] = float(rel.max()) if rel.size else 0.0
         row["differ_classes"] = _cls(classify(tris, rays, base, h)) if row["differ_from_baseline"] else ""
     csv = os.path.join(a.out, "precision.csv")
     prov = provenance_line(a.scene, made["config"], made["rtaccel"], scene_fields={"rays": len(rays)},

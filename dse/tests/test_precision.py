@@ -42,7 +42,8 @@ def test_precision_table_on_the_hairball(tmp_path, capsys):
     rows = {r["option"]: r for r in csv.DictReader(lines[1:])}
     assert list(rows) == j["options"] and set(precision.COLUMNS) == set(rows["fp32:mt"])
     base, bf, e3, q4, pk = (rows[o] for o in j["options"])
-    assert int(base["differ_from_baseline"]) == 0 and base["differ_classes"] == ""
+    assert int(base["differ_from_baseline"]) == 0 and base["differ_classes"] == "" and float(base["max_rel_t_vs_baseline"]) == 0
+    assert int(e3["prim_differs_from_baseline"]) <= int(e3["differ_from_baseline"])
     # conservative boxes (and the watertight slack) lose nothing; looser boxes cost more work
     assert int(bf["lost_hits"]) == 0 and int(e3["lost_hits"]) == 0 and int(bf["exhaustive_rays"]) == 200
     # 4-bit quantized nodes: looser boxes (more work), half the bytes per node fetch, nothing lost; modelled only
