@@ -161,7 +161,8 @@ def main(argv=None):
         row["differ_classes"] = _cls(classify(tris, rays, base, h)) if row["differ_from_baseline"] else ""
     csv = os.path.join(a.out, "precision.csv")
     prov = provenance_line(a.scene, made["config"], made["rtaccel"], scene_fields={"rays": len(rays)},
-                           fields=" ".join(knobs[k].lstrip("-") + "=" + knobs[k + 1] for k in range(0, len(knobs) - 1, 2)))
+                           fields=" ".join(knobs[k].lstrip("-") + "=" + knobs[k + 1] for k in range(0, len(knobs) - 1, 2)
+                                           if knobs[k] != "--config"))
     def fmt(v):
         return f"{v:.6g}" if isinstance(v, float) else str(v).replace(",", ";")
     write_text(csv, prov + ",".join(COLUMNS) + "\n" + "".join(",".join(fmt(r.get(k, "")) for k in COLUMNS) + "\n" for r in rows))
