@@ -12,24 +12,58 @@ import rtaccel.config.PlatformParams
   * Z = L - D - B, is pure delay. MVA gives the throughput of N rays in flight; with N = 1 it is 1 / L,
   * for large N it approaches 1 / max(D, B).
   *
+  * Head-of-line blocking: the MC answers in request order, so a hit cannot leave before every older request,
+  * and the one that leaves last is the youngest miss in flight. By the arrival theorem an access of the
+  * population-k network sees the population-(k-1) network: Qm misses in flight (Little: miss rate x a miss's
+  * time in flight Rm = DRAM latency + its DRAM residence). Taking the misses' issue times as a Poisson stream
+  * of rate Qm / Rm, the youngest one's age is exponential, and a hit whose own latency is c waits
+  * E[max(0, Rm - c - age)] = w (1 - (1 - e^-u) / u) cycles more, with w = Rm - c and u = w Qm / Rm. That wait
+  * joins the ray's delay; it is 0 with one TU (no other request in flight) and without hits (no cache).
+  * At most min(TUs, hw.iuOutstanding, hw.mcOutstanding) rays have an access in the MC: the rest wait at the
+  * IU's arbiter, and since the model's ray time is all memory time, N beyond that limit adds nothing.
+  *
   * `p.hw.cachePathCycles` is the extra latency of an access through a cache path (tag lookup, ticket queue, data
   * RAM, output queue), measured on the RTL at one TU (docs/caches.md: 7.5-8.8 cycles per access on sponza and
-  * conference); an uncached path adds none (measured -1..0). Head-of-line blocking in the in-order MC (a hit
-  * waiting behind another TU's miss) is not modelled: the prediction is optimistic at mid TU counts.
+  * conference); an uncached path adds none (measured -1..0).
   */
 object Throughput {
 
-  final case class Prediction(latencyCycles: Double, dramCycles: Double, beatCycles: Double, raysPerCycle: Double)
+  /** raysPerCycle: with head-of-line blocking and the outstanding limit; raysPerCycleNoHol: the plain MVA of
+    * TUs rays (the model before head-of-line blocking, kept to show what the in-order stream costs). */
+  final case class Prediction(latencyCycles: Double, dramCycles: Double, beatCycles: Double, raysPerCycle: Double,
+                              raysPerCycleNoHol: Double, holCyclesPerRay: Double, inFlightLimit: Int)
 
-  def mva(delay: Double, demands: Seq[Double], n: Int): Double = {
-    require(n >= 1, s"TUs must be at least 1 (got $n)")
-    var q = demands.map(_ => 0.0); var x = 0.0
-    for (k <- 1 to n) {
-      val r = demands.zip(q).map { case (d, qq) => d * (1 + qq) }
-      x = k / (delay + r.sum)
-      q = r.map(_ * x)
+  /** Per ray: hits and misses (accesses), the latency of a lone hit, the DRAM latency of a miss. */
+  final case class InOrder(hits: Double, misses: Double, hitLatency: Double, missLatency: Double) {
+    require(hits >= 0 && misses >= 0 && hitLatency >= 0 && missLatency >= 0, s"negative in-order stream figures: $this")
+  }
+  val noBlocking: InOrder = InOrder(0, 0, 0, 0)
+
+  def mva(delay: Double, demands: Seq[Double], n: Int): Double = mvaInOrder(delay, demands.head, demands.tail, noBlocking, n)._1
+
+  /** E[max(0, w - age)] for an exponential age of mean m / q (q misses in flight, each in flight m cycles). */
+  def youngestResidual(w: Double, q: Double, m: Double): Double =
+    if (w <= 0 || q <= 0 || m <= 0) 0.0 else {
+      val u = w * q / m
+      if (u < 1e-6) w * u / 2 else w * (1 - (1 - math.exp(-u)) / u)
     }
-    x
+
+  /** MVA with head-of-line blocking: (rays per cycle, blocking cycles per ray) of n rays in flight. `dram` is
+    * the DRAM demand (the misses' transfers), `others` the further queueing demands (the response port). */
+  def mvaInOrder(delay: Double, dram: Double, others: Seq[Double], s: InOrder, n: Int): (Double, Double) = {
+    require(n >= 1, s"TUs must be at least 1 (got $n)")
+    val demands = dram +: others
+    var q = demands.map(_ => 0.0); var x = 0.0; var hol = 0.0
+    var missInFlight = 0.0 // Rm of the population before: latency + a miss's share of its DRAM residence
+    for (k <- 1 to n) {
+      val qm = x * s.misses * missInFlight // misses in flight that an arriving access sees (population k - 1)
+      hol = s.hits * youngestResidual(missInFlight - s.hitLatency, qm, missInFlight)
+      val r = demands.zip(q).map { case (d, qq) => d * (1 + qq) }
+      x = k / (delay + hol + r.sum)
+      q = r.map(_ * x)
+      missInFlight = if (s.misses > 0) s.missLatency + r.head / s.misses else 0.0
+    }
+    (x, hol)
   }
 
   def predict(p: PlatformParams, s: CacheSink, rays: Int, tus: Int): Prediction = {
@@ -45,6 +79,14 @@ object Throughput {
     val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n
     val dram = (s.nodeDramBytes + s.primDramBytes) / bpc / n
     val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primTests * p.primAccessBytes) / beatBytes / n
-    Prediction(latency, dram, beats, mva(math.max(0.0, latency - dram - beats), Seq(dram, beats), tus))
+    val delay = math.max(0.0, latency - dram - beats)
+    val accesses = s.nodeAccesses.toDouble + s.leafAccesses
+    val hits = accesses - nodeMisses - leafMisses
+    // a lone hit: the path's overhead (every access of a cached path pays it) and its beats from the cache
+    val hitLatency = if (hits > 0) overhead / accesses + hitBytes / beatBytes / hits else 0.0
+    val stream = InOrder(hits / n, (nodeMisses + leafMisses) / n, hitLatency, lat)
+    val limit = Seq(tus, p.hw.iuOutstanding, p.hw.mcOutstanding).min
+    val (x, hol) = mvaInOrder(delay, dram, Seq(beats), stream, limit)
+    Prediction(latency, dram, beats, x, mva(delay, Seq(dram, beats), tus), hol, limit)
   }
 }
