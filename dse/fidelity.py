@@ -274,7 +274,8 @@ def main(argv=None):
     cfgs = [c for _, c in points]
     log(f"{len(cfgs)} configurations x {len(scenes)} scenes ({', '.join(s['name'] for s in scenes)}), "
         f"{a.width}x{a.height} depth {a.depth}: cache model, then RTL")
-    pool = Pool(a.workers, "", a.java, os.path.join(out, "logs"))
+    # one worker builds where make simulate does (build/sim, cached per circuit), so the two share their builds
+    pool = Pool(a.workers, "", a.java, os.path.join(out, "logs"), "build/sim" if a.workers <= 1 else None)
     sweep = Sweep(sp, scenes, out, pool, a.version)
     try:
         cs = sweep.runs("cachesim", cfgs)
