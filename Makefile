@@ -249,7 +249,7 @@ dse: deps
 
 # The speed-for-accuracy ladder (docs/dse.md): every rung of make dse on a fixed grid (FIDELITY_TUS x FIDELITY_CACHES
 # x FIDELITY_MPPLS) x FIDELITY_SCENES (sponza, conference: from SHARED_SCENES, skipped when absent; procedural names;
-# mesh paths), each cheap figure against the RTL. build/fidelity/fidelity.csv + fidelity.png + store.sqlite (a rerun
+# mesh paths), each cheap figure against the RTL. build/fidelity/fidelity.csv + .png + .md + store.sqlite (a rerun
 # evaluates only what is missing); JSON last line; exit 3 when a run failed its check.
 FIDELITY_SCENES ?= sponza,conference,hairball
 FIDELITY_TUS    ?= 1,2,4,8,16,32

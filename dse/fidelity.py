@@ -12,7 +12,8 @@ and SQLite store, so a rerun evaluates only what is missing) and each cheap figu
   cachesim    the trace-driven cache model: node/prim miss rate, DRAM bytes per ray
   rtl         the platform RTL under Verilator, checked ray by ray against the model (the reference)
 
-Writes OUT/fidelity.csv (one row per point x scene), OUT/fidelity.png and OUT/store.sqlite; the last stdout line
+Writes OUT/fidelity.csv (one row per point x scene), OUT/fidelity.png, OUT/fidelity.md (the tables of docs/dse.md)
+and OUT/store.sqlite; the last stdout line
 is {"configurations", "scenes", "rungs": {rung: {"figure", "median_abs_err", "max_abs_err", "wall_s_per_ray"}},
 "mva_by_tus", "failed", "csv", ...}. A run that failed its check (RTL vs model mismatch), was refused or crashed
 is listed in the CSV with its status, never plotted nor counted in an error; the exit status is then 3.
@@ -170,6 +171,36 @@ def summary(rows):
     return out, by_tus
 
 
+def _pct(s, key="median_abs_err", unit="%"):
+    return f"{100 * s[key]:.1f} {unit}" if s else "–"
+
+
+def markdown(rungs, by_tus, prov):
+    """The two tables of docs/dse.md: per rung (wall time per ray, median/max error against the RTL) and the MVA's
+    rays/s error per TU count, before and after head-of-line blocking."""
+    out = [f"<!-- {prov.strip('# ').strip()} -->", "", "| rung | judged on | wall time per ray | median \\|error\\| | max \\|error\\| | n |",
+           "|---|---|---|---|---|---|"]
+    for name, s in rungs.items():
+        wall = f"{s['wall_s_per_ray'] * 1e6:.3g} µs" if s.get("wall_s_per_ray") is not None else "–"
+        if name == "cachesim":
+            parts = [(k, s.get(k)) for k in ("dram_bytes_err", "node_miss_diff", "prim_miss_diff")]
+            unit = {"dram_bytes_err": "%", "node_miss_diff": "points", "prim_miss_diff": "points"}
+            med = ", ".join(f"{k}: {_pct(v, unit=unit[k])}" for k, v in parts if v)
+            mx = ", ".join(f"{k}: {_pct(v, 'max_abs_err', unit[k])}" for k, v in parts if v)
+            n = max((v["n"] for _, v in parts if v), default=0)
+        elif name == "rtl":
+            med = mx = "reference"
+            n = ""
+        else:
+            med, mx, n = _pct(s if s.get("n") else None), _pct(s if s.get("n") else None, "max_abs_err"), s.get("n", 0)
+        out.append(f"| {name} | {s['figure']} | {wall} | {med} | {mx} | {n} |")
+    out += ["", "| TUs | MVA median \\|error\\| | MVA max \\|error\\| | plain MVA median | plain MVA max | n |", "|---|---|---|---|---|---|"]
+    for t, v in by_tus.items():
+        out.append(f"| {t} | {_pct(v['mva'])} | {_pct(v['mva'], 'max_abs_err')} | {_pct(v['mva_no_hol'])} | "
+                   f"{_pct(v['mva_no_hol'], 'max_abs_err')} | {(v['mva'] or {}).get('n', 0)} |")
+    return "\n".join(out) + "\n"
+
+
 def write_csv(path, rows, prov):
     buf = io.StringIO()
     buf.write(prov)
@@ -292,6 +323,7 @@ def main(argv=None):
     write_csv(csv_path, rows, prov)
     rungs, by_tus = summary(rows)
     png = plot(os.path.join(out, "fidelity.png"), rows, prov.strip("# \n"))
+    write_text(os.path.join(out, "fidelity.md"), markdown(rungs, by_tus, prov))
     failed = [{"point": r["point"], "scene": r["scene"], "tus": r["tus"], "cache": r["cache"], "mppl": r["mppl"],
                "cachesim": r["cachesim_status"], "rtl": r["rtl_status"], "error": r["error"]}
               for r in rows if r not in ok_rows(rows)]

@@ -52,6 +52,8 @@ def test_ladder_errors_against_the_rtl_row_and_a_rerun_from_the_store(tmp_path, 
     assert j["rungs"]["cachesim"]["dram_bytes_err"]["max_abs_err"] == pytest.approx(0.2)
     assert j["rungs"]["mva"]["wall_s_per_ray"] == pytest.approx(1e-6)
     assert set(j["mva_by_tus"]) == {"1", "4"} and j["png"].endswith("fidelity.png")
+    md = (tmp_path / "fid" / "fidelity.md").read_text()
+    assert "| mva | rays_per_s |" in md and "| 25.0 % | 25.0 % | 4 |" in md and "| 4 | 25.0 % |" in md
     assert len(requests(log)) == 8  # 4 cache-model runs and 4 RTL runs
     # a rerun finds every run in the store and makes none
     rc2, j2, _, rows2 = run(capsys, tmp_path, jv)
