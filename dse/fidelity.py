@@ -24,6 +24,7 @@ import json
 import os
 import statistics
 import sys
+import textwrap
 import time
 
 from scenes.cli import EXIT_CHECK_FAILED, ArgParser, run
@@ -256,7 +257,7 @@ def plot(path, rows, title):
         ax.set_ylabel("rays/s error vs RTL (%)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle(title, fontsize=8)
+    fig.suptitle("\n".join(textwrap.wrap(title, 60 * len(scenes))), fontsize=7)
     fig.tight_layout()
     save_png(fig, path)
     plt.close(fig)
