@@ -32,10 +32,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area area-fp cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse precision
+        yosys verilog area area-fp cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse precision fidelity
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -266,6 +266,25 @@ dse: deps
 	@test -n "$(SPACE)" || { echo "error: give SPACE=<space file>, e.g. SPACE=dse/spaces/smoke.toml" >&2; exit 2; }
 	@$(PY) -m dse.explore --space $(SPACE) --workers $(WORKERS) $(if $(RAY_ADDRESS),--ray-address $(RAY_ADDRESS)) \
 	  $(if $(OUT),--out $(OUT)) --java '$(DSE_JAVA)' --version $(VERSION)
+
+# The speed-for-accuracy ladder (docs/dse.md): every rung of make dse on a fixed grid (FIDELITY_TUS x FIDELITY_CACHES
+# x FIDELITY_MPPLS) x FIDELITY_SCENES (sponza, conference: from SHARED_SCENES, skipped when absent; procedural names;
+# mesh paths), each cheap figure against the RTL. build/fidelity/fidelity.csv + .png + .md + store.sqlite (a rerun
+# evaluates only what is missing); JSON last line; exit 3 when a run failed its check.
+FIDELITY_SCENES ?= sponza,conference,hairball
+FIDELITY_TUS    ?= 1,2,4,8,16,32
+FIDELITY_CACHES ?= none,dm,lrp,hybrid
+FIDELITY_MPPLS  ?= 4,8
+FIDELITY_NODE_CACHE ?= 8192
+FIDELITY_WIDTH  ?= 32
+FIDELITY_HEIGHT ?= 24
+FIDELITY_DEPTH  ?= 5
+FIDELITY_WORKERS ?= 1
+fidelity: deps
+	@RTACCEL_SHARED_SCENES=$(SHARED_SCENES) $(PY) -m dse.fidelity --scenes "$(FIDELITY_SCENES)" --tus "$(FIDELITY_TUS)" \
+	  --caches "$(FIDELITY_CACHES)" --mppls "$(FIDELITY_MPPLS)" --node-cache $(FIDELITY_NODE_CACHE) \
+	  --width $(FIDELITY_WIDTH) --height $(FIDELITY_HEIGHT) --depth $(FIDELITY_DEPTH) --seed $(SEED) \
+	  --workers $(FIDELITY_WORKERS) --out build/fidelity --java '$(DSE_JAVA)' --version $(VERSION)
 
 # ---------------------------------------------------------------- tests
 FIXTURE_SCENES := cornell hairball soup extreme

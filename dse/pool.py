@@ -7,11 +7,15 @@ from .worker import Evaluator
 
 
 class Pool:
-    def __init__(self, workers, address, java, log_dir):
+    def __init__(self, workers, address, java, log_dir, work=None):
+        """work: the Verilator build folder of a single worker (default: build/sim-dse/<worker>); only one
+        worker may use a given folder, so it is refused with more."""
         self.inline = workers == 0 and not address
         self.log_dir, self.java = log_dir, java
+        if work and (address or workers > 1):
+            raise ValueError("a shared Verilator build folder needs a single local worker")
         if self.inline:
-            self.actors = [Evaluator(java, log_dir, "w0")]
+            self.actors = [Evaluator(java, log_dir, "w0", work)]
             return
         import ray
 
@@ -28,7 +32,7 @@ class Pool:
                          log_to_driver=False)
         n = workers or int(ray.cluster_resources().get("CPU", 1))
         self.remote = ray.remote(num_cpus=1, max_restarts=-1)(Evaluator)
-        self.actors = [self.remote.remote(java, log_dir, f"w{i}") for i in range(n)]
+        self.actors = [self.remote.remote(java, log_dir, f"w{i}", work) for i in range(n)]
 
     @property
     def size(self):

@@ -77,16 +77,17 @@ class JvmServer:
 class Evaluator:
     """One worker: runs tasks {"key", "cmd", "args"} on its JVM and returns {"key", "answer", "wall_s", "worker"}."""
 
-    def __init__(self, java, log_dir, name):
+    def __init__(self, java, log_dir, name, work=None):
         os.makedirs(log_dir, exist_ok=True)
         self.name = name
+        self.work = work or os.path.join("build", "sim-dse", name)  # Verilator builds, cached per circuit
         self.jvm = JvmServer(java, os.path.join(log_dir, f"{name}.log"))
 
     def run(self, task):
         t0 = time.time()
         args = list(task["args"])
         if task["cmd"] == "simulate":  # one Verilator build folder per worker: two builds must not share one
-            args += ["--work", os.path.join("build", "sim-dse", self.name)]
+            args += ["--work", self.work]
         answer = self.jvm.request(task["cmd"], args)
         return {"key": task["key"], "answer": answer, "wall_s": time.time() - t0, "worker": self.name}
 

@@ -1,8 +1,9 @@
 """Stand-in for `java ... rtaccel.cli.Serve` in the dse.explore tests (no JVM): the same JSON-lines protocol,
 answers that are simple functions of the flags, so the tests can predict every figure and every front.
 
-cachesim: predicted rays/s = 1e5 * TUS * (1 + NODE_CACHE / 256); DRAM bytes per ray = 1000 / (1 + NODE_CACHE / 64).
-simulate: rays/s = 0.8 x the prediction. area: refused like a build without FIDELITY=model unless
+cachesim: predicted rays/s = 1e5 * TUS * (1 + NODE_CACHE / 256) (1.5 x that without head-of-line blocking); DRAM
+bytes per ray = 1000 / (1 + NODE_CACHE / 64), node miss rate 1 / (1 + NODE_CACHE / 64).
+simulate: rays/s = 0.8 x the prediction, DRAM bytes per ray 1.25 x the model's, node miss rate 0.001 below it. area: refused like a build without FIDELITY=model unless
 FAKE_SERVE_AREA=1; then lut = 1000 * TUS + NODE_CACHE, bram36 = NODE_CACHE / 64, fits when lut <= 3000.
 FAKE_SERVE_REFUSE_TUS=n: every run with TUS=n is refused (status 2); FAKE_SERVE_CHECK_FAIL_TUS=n: its RTL run
 fails a check (status 3); FAKE_SERVE_CRASH_TUS=n: the server process dies on its cachesim request.
@@ -28,7 +29,8 @@ def answer(cmd, a):
         return 0, {"scene": a["scene-label"], "rtaccel": "fake-1", "config": a.get("config", "fit"), "tus": tus, "rays": 100,
                    "node_accesses": 1000, "node_bytes_per_ray_nocache": 1280.0, "predicted_rays_per_s": pred,
                    "bandwidth_bound_rays_per_s": 2 * pred, "dram_bytes_per_ray": bpr,
-                   "node_cache": {"entries": nc, "miss_rate": 1 / (1 + nc / 64)}, "prim_cache": {"entries": 0, "miss_rate": 1.0}}, None
+                   "node_cache": {"entries": nc, "miss_rate": 1 / (1 + nc / 64)}, "prim_cache": {"entries": 0, "miss_rate": 1.0},
+                   "predicted_rays_per_s_no_hol": 1.5 * pred, "trace_s": 0.5, "wall_s": 0.25, "predict_s": 1e-4}, None
     if cmd == "area":
         if env("FAKE_SERVE_AREA") != "1":
             return 2, None, "FIDELITY=model is not available: only FIDELITY=yosys (a real synthesis) is built so far"
@@ -37,8 +39,9 @@ def answer(cmd, a):
              "ff": 2 * lut, "dsp": 4 * tus, "bram36": nc / 64, "fits": lut <= 3000, "first_overflow": None, "units": {}}
         return (0 if j["fits"] else 3), j, (None if j["fits"] else f"check failed: does not fit: lut {lut} > 3000")
     if cmd == "simulate":
-        j = {"rays": 100, "rays_per_s_at_clock": 0.8 * pred, "dram_bytes_per_ray": 1000 / (1 + nc / 64),
-             "node_cache": {"miss_rate": 1 / (1 + nc / 64)}, "ok": True, "failures": []}
+        j = {"rays": 100, "rays_per_s_at_clock": 0.8 * pred, "dram_bytes_per_ray": 1250 / (1 + nc / 64),
+             "node_cache": {"entries": nc, "miss_rate": 1 / (1 + nc / 64) - 0.001}, "prim_cache": {"entries": 0},
+             "sim_wall_s": 2.0, "ok": True, "failures": []}
         if env("FAKE_SERVE_CHECK_FAIL_TUS") == str(tus):
             j.update(ok=False, failures=["mismatch_vs_model"])
             return 3, j, "check failed: mismatch_vs_model"

@@ -9,18 +9,43 @@ import rtaccel.config.PlatformParams
   * then for a miss the DRAM latency plus the transfer at the sustained rate, for a hit the beats from the
   * cache). Two shared resources serve every TU: DRAM (demand D = DRAM bytes / sustained bytes per cycle) and
   * the MC's one-beat-per-cycle response port (demand B = all beats, hits and misses). The rest,
-  * Z = L - D - B, is pure delay. MVA gives the throughput of N rays in flight; with N = 1 it is 1 / L,
-  * for large N it approaches 1 / max(D, B).
+  * Z = L - D - B, is pure delay. MVA over the populations 1..N gives the throughput of N rays in flight;
+  * with N = 1 it is 1 / L, for large N it approaches 1 / max(D, B) (and is clipped there).
+  *
+  * Both servers are FCFS with (nearly) constant service per visit, so an arriving request finds the one in
+  * service half done: R = S (1 + Q - U / 2) per visit (Reiser's residual correction of MVA for deterministic
+  * service) instead of the exponential server's S (1 + Q).
+  *
+  * Head-of-line blocking: the MC answers in request order, so a hit cannot leave before every older request,
+  * and the one that leaves last is the youngest miss in flight. Seen by an access of the population-k network:
+  * the misses of the k - 1 other TUs, issued at (k-1)/k X(k) m per cycle (m misses per ray), each in flight
+  * Rm = DRAM latency + its DRAM residence. Taking those issues as a Poisson stream, the youngest one's age is
+  * exponential with mean Rm / Qm (Qm = misses in flight, by Little), and a hit whose own latency is c waits
+  * E[max(0, Rm - c - age)] = w (1 - (1 - e^-u) / u) cycles more, w = Rm - c, u = w Qm / Rm. That wait joins
+  * the ray's delay; X(k) and the wait depend on each other and are solved as a fixed point per population.
+  * It is 0 with one TU (nothing else in flight) and without hits (no cache).
+  * At most min(TUs, hw.iuOutstanding, hw.mcOutstanding) rays have an access in the MC: the rest wait at the
+  * IU's arbiter, and since the model's ray time is all memory time, N beyond that limit adds nothing.
+  * Measured against the RTL and against an event simulation of the same in-order network in docs/dse.md
+  * ("The speed-for-accuracy ladder").
   *
   * `p.hw.cachePathCycles` is the extra latency of an access through a cache path (tag lookup, ticket queue, data
   * RAM, output queue), measured on the RTL at one TU (docs/caches.md: 7.5-8.8 cycles per access on sponza and
-  * conference); an uncached path adds none (measured -1..0). Head-of-line blocking in the in-order MC (a hit
-  * waiting behind another TU's miss) is not modelled: the prediction is optimistic at mid TU counts.
+  * conference); an uncached path adds none (measured -1..0).
   */
 object Throughput {
 
-  final case class Prediction(latencyCycles: Double, dramCycles: Double, beatCycles: Double, raysPerCycle: Double)
+  /** raysPerCycle: with head-of-line blocking and the outstanding limit; raysPerCycleNoHol: the plain MVA of
+    * TUs rays (the model before head-of-line blocking, kept to show what the in-order stream costs). */
+  final case class Prediction(latencyCycles: Double, dramCycles: Double, beatCycles: Double, raysPerCycle: Double,
+                              raysPerCycleNoHol: Double, holCyclesPerRay: Double, inFlightLimit: Int)
 
+  /** Per ray: hits and misses (accesses), the latency of a lone hit, the DRAM latency of a miss. */
+  final case class InOrder(hits: Double, misses: Double, hitLatency: Double, missLatency: Double) {
+    require(hits >= 0 && misses >= 0 && hitLatency >= 0 && missLatency >= 0, s"negative in-order stream figures: $this")
+  }
+  /** The plain exact MVA of n customers over exponential FCFS servers (`demands`) and a pure delay: the model
+    * before head-of-line blocking, kept as `raysPerCycleNoHol`. */
   def mva(delay: Double, demands: Seq[Double], n: Int): Double = {
     require(n >= 1, s"TUs must be at least 1 (got $n)")
     var q = demands.map(_ => 0.0); var x = 0.0
@@ -30,6 +55,41 @@ object Throughput {
       q = r.map(_ * x)
     }
     x
+  }
+
+  /** E[max(0, w - age)] for an exponential age of mean m / q (q misses in flight, each in flight m cycles):
+    * the wait of a hit behind the youngest miss. */
+  def youngestResidual(w: Double, q: Double, m: Double): Double =
+    if (w <= 0 || q <= 0 || m <= 0) 0.0 else {
+      val u = w * q / m
+      if (u < 1e-6) w * u / 2 else w * (1 - (1 - math.exp(-u)) / u)
+    }
+
+  /** Rays per cycle and head-of-line blocking cycles per ray of n rays in flight over the DRAM (demand `dram`
+    * per ray) and the response port (`port`), both FCFS with constant service per visit, plus `delay`. */
+  def mvaInOrder(delay: Double, dram: Double, port: Double, s: InOrder, n: Int): (Double, Double) = {
+    require(n >= 1, s"TUs must be at least 1 (got $n)")
+    var (qD, qB, uD, uB) = (0.0, 0.0, 0.0, 0.0) // queue lengths and utilisations of the population before
+    var x = 0.0; var hol = 0.0
+    for (k <- 1 to n) {
+      val rD = dram * (1 + qD - uD / 2)
+      val rB = port * (1 + qB - uB / 2)
+      val inFlight = if (s.misses > 0) s.missLatency + rD / s.misses else 0.0
+      // the fixed point of X(k) and the blocking it causes (damped: the map is decreasing in X)
+      var xk = k / (delay + rD + rB); var it = 0; var done = false
+      while (!done && it < 200) {
+        val othersInFlight = (k - 1.0) / k * xk * s.misses * inFlight
+        hol = s.hits * youngestResidual(inFlight - s.hitLatency, othersInFlight, inFlight)
+        val next = k / (delay + hol + rD + rB)
+        done = math.abs(next - xk) <= 1e-12 * xk
+        xk = if (done) next else (xk + next) / 2
+        it += 1
+      }
+      x = xk
+      qD = x * rD; qB = x * rB; uD = x * dram; uB = x * port
+    }
+    val bottleneck = math.max(dram, port)
+    (if (bottleneck > 0) math.min(x, 1 / bottleneck) else x, hol)
   }
 
   def predict(p: PlatformParams, s: CacheSink, rays: Int, tus: Int): Prediction = {
@@ -45,6 +105,14 @@ object Throughput {
     val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n
     val dram = (s.nodeDramBytes + s.primDramBytes) / bpc / n
     val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primBytesAll) / beatBytes / n
-    Prediction(latency, dram, beats, mva(math.max(0.0, latency - dram - beats), Seq(dram, beats), tus))
+    val delay = math.max(0.0, latency - dram - beats)
+    val accesses = s.nodeAccesses.toDouble + s.leafAccesses
+    val hits = accesses - nodeMisses - leafMisses
+    // a lone hit: the path's overhead (every access of a cached path pays it) and its beats from the cache
+    val hitLatency = if (hits > 0) overhead / accesses + hitBytes / beatBytes / hits else 0.0
+    val stream = InOrder(hits / n, (nodeMisses + leafMisses) / n, hitLatency, lat)
+    val limit = Seq(tus, p.hw.iuOutstanding, p.hw.mcOutstanding).min
+    val (x, hol) = mvaInOrder(delay, dram, beats, stream, limit)
+    Prediction(latency, dram, beats, x, mva(delay, Seq(dram, beats), tus), hol, limit)
   }
 }
