@@ -6,7 +6,7 @@ import rtaccel.config.RefFormat
   * Ref word 0 marks an empty child slot: it would name the root, which is never anyone's child.
   */
 final class RefCodec(f: RefFormat) {
-  private val primFlag = 1 << (f.refBits - 1)
+  private[this] val primFlag = 1 << (f.refBits - 1)
   private def mask(bits: Int): Int = if (bits >= 32) -1 else (1 << bits) - 1
 
   def node(id: Int, level: Int): Int = {
@@ -19,10 +19,15 @@ final class RefCodec(f: RefFormat) {
     primFlag | ((count - 1) << f.primIndexBits) | first
   }
 
+  // masks computed once: the traversal decodes a reference per child slot
+  private[this] val nodeIdMask = mask(f.nodeIdBits); private[this] val levelMask = mask(f.levelBits)
+  private[this] val primIndexMask = mask(f.primIndexBits); private[this] val countMask = mask(f.countBits)
+  private[this] val nodeIdBits = f.nodeIdBits; private[this] val primIndexBits = f.primIndexBits
+
   def isEmpty(ref: Int): Boolean = ref == 0
   def isPrim(ref: Int): Boolean = (ref & primFlag) != 0
-  def nodeId(ref: Int): Int = ref & mask(f.nodeIdBits)
-  def level(ref: Int): Int = (ref >>> f.nodeIdBits) & mask(f.levelBits)
-  def firstPrim(ref: Int): Int = ref & mask(f.primIndexBits)
-  def count(ref: Int): Int = ((ref >>> f.primIndexBits) & mask(f.countBits)) + 1
+  def nodeId(ref: Int): Int = ref & nodeIdMask
+  def level(ref: Int): Int = (ref >>> nodeIdBits) & levelMask
+  def firstPrim(ref: Int): Int = ref & primIndexMask
+  def count(ref: Int): Int = ((ref >>> primIndexBits) & countMask) + 1
 }

@@ -4,10 +4,30 @@ import Fp32._
 
 /** A ray prepared for the intersection unit: origin, direction and the reciprocal direction computed
   * once per ray (1/±0 = ±inf, so axis-parallel rays need no special case).
+  * The traversal reuses one instance ray after ray (`set`, no allocation per ray): every per-ray value is
+  * a var that `set` computes, and the constructor calls `set`; a new per-ray value belongs there too.
   */
-final class PreparedRay(val ox: Float, val oy: Float, val oz: Float, val dx: Float, val dy: Float, val dz: Float,
-                        val tmin: Float, val tmax: Float) {
-  val ix: Float = 1f / dx; val iy: Float = 1f / dy; val iz: Float = 1f / dz
+final class PreparedRay private (var ox: Float, var oy: Float, var oz: Float, var dx: Float, var dy: Float, var dz: Float,
+                                 var tmin: Float, var tmax: Float, var ix: Float, var iy: Float, var iz: Float) {
+  def this(ox: Float, oy: Float, oz: Float, dx: Float, dy: Float, dz: Float, tmin: Float, tmax: Float) =
+    this(ox, oy, oz, dx, dy, dz, tmin, tmax, 1f / dx, 1f / dy, 1f / dz)
+  def set(ox: Float, oy: Float, oz: Float, dx: Float, dy: Float, dz: Float, tmin: Float, tmax: Float): this.type = {
+    this.ox = ox; this.oy = oy; this.oz = oz; this.dx = dx; this.dy = dy; this.dz = dz; this.tmin = tmin; this.tmax = tmax
+    ix = 1f / dx; iy = 1f / dy; iz = 1f / dz
+    this
+  }
+  /** Ray i of `rays` (its 8 floats from offset 8i). */
+  def set(rays: Array[Float], i: Int): this.type = {
+    val b = 8 * i
+    set(rays(b), rays(b + 1), rays(b + 2), rays(b + 3), rays(b + 4), rays(b + 5), rays(b + 6), rays(b + 7))
+  }
+  /** No slab-test operand can be NaN for this ray on NaN-free box words (RayBox.testRegular): the origin is
+    * finite, each reciprocal direction finite and nonzero, tmin and tmax not NaN. Then (p - o) * inv is NaN
+    * only for a NaN p.
+    */
+  def regular: Boolean = finite(ox) && finite(oy) && finite(oz) && finite(ix) && finite(iy) && finite(iz) &&
+    ix != 0f && iy != 0f && iz != 0f && !tmin.isNaN && !tmax.isNaN
+  private def finite(x: Float): Boolean = java.lang.Float.isFinite(x)
 }
 
 /** Ray-box slab test. Per axis t0=(min-o)*inv, t1=(max-o)*inv, lo/hi by NaN-propagating min/max; then
@@ -26,6 +46,27 @@ object RayBox {
     val tfar = minNum(minNum(minNum(tmax, maxProp(t0x, t1x)), maxProp(t0y, t1y)), maxProp(t0z, t1z))
     if (tnear <= (if (slack == 0) tfar else BoxSlack.up32(tfar, slack))) tnear else Float.NaN
   }
+
+  /** `test`, bit for bit, when no operand is NaN: a `regular` ray (PreparedRay) against box words none of
+    * which is NaN, with tmax not NaN; the traversal's fast path. Without NaN every min/max of `test` is a plain
+    * compare-select, which as a value is Math.min/max: those compile to branch-free instructions where the
+    * compare-select is a data-dependent (often mispredicted) branch. The two differ only in the sign of a zero
+    * (the compare-select returns the second operand on -0 vs +0), so only a zero tnear needs the compare-selects
+    * to give its sign; tfar is only compared.
+    */
+  def testRegular(r: PreparedRay, tmax: Float, mnx: Float, mny: Float, mnz: Float, mxx: Float, mxy: Float, mxz: Float): Float = {
+    val t0x = (mnx - r.ox) * r.ix; val t1x = (mxx - r.ox) * r.ix
+    val t0y = (mny - r.oy) * r.iy; val t1y = (mxy - r.oy) * r.iy
+    val t0z = (mnz - r.oz) * r.iz; val t1z = (mxz - r.oz) * r.iz
+    val tnear = Math.max(Math.max(Math.max(r.tmin, Math.min(t0x, t1x)), Math.min(t0y, t1y)), Math.min(t0z, t1z))
+    val tfar = Math.min(Math.min(Math.min(tmax, Math.max(t0x, t1x)), Math.max(t0y, t1y)), Math.max(t0z, t1z))
+    if (!(tnear <= tfar)) Float.NaN
+    else if (tnear != 0f) tnear
+    else max(max(max(r.tmin, min(t0x, t1x)), min(t0y, t1y)), min(t0z, t1z))
+  }
+  // minNum/minProp and maxNum/maxProp (Fp32) on operands that are not NaN
+  @inline private def min(a: Float, b: Float): Float = if (a < b) a else b
+  @inline private def max(a: Float, b: Float): Float = if (a > b) a else b
 }
 
 /** The box test's slack (PlatformParams.boxSlackUlps, TRI_TEST=watertight): tfar moved `k` ulps toward +inf on
@@ -52,13 +93,20 @@ object BoxSlack {
 object RayTriangle {
   final class Result { var t = 0f; var u = 0f; var v = 0f }
 
-  def test(r: PreparedRay, tmax: Float, c: Int => Float, out: Result): Boolean = {
-    val e1x = c(3) - c(0); val e1y = c(4) - c(1); val e1z = c(5) - c(2)
-    val e2x = c(6) - c(0); val e2y = c(7) - c(1); val e2z = c(8) - c(2)
+  def test(r: PreparedRay, tmax: Float, c: Int => Float, out: Result): Boolean =
+    test(r, tmax, c(0), c(1), c(2), c(3), c(4), c(5), c(6), c(7), c(8), out)
+
+  /** The same test on the vertex coordinates v0 = (ax, ay, az), v1 = (bx, by, bz), v2 = (cx, cy, cz), as the
+    * traversal reads them from the memory image (no closure per primitive read).
+    */
+  def test(r: PreparedRay, tmax: Float, ax: Float, ay: Float, az: Float, bx: Float, by: Float, bz: Float,
+           cx: Float, cy: Float, cz: Float, out: Result): Boolean = {
+    val e1x = bx - ax; val e1y = by - ay; val e1z = bz - az
+    val e2x = cx - ax; val e2y = cy - ay; val e2z = cz - az
     val px = crossX(r.dy, r.dz, e2y, e2z); val py = crossY(r.dx, r.dz, e2x, e2z); val pz = crossZ(r.dx, r.dy, e2x, e2y)
     val det = dot(e1x, e1y, e1z, px, py, pz)
     val inv = 1f / det
-    val sx = r.ox - c(0); val sy = r.oy - c(1); val sz = r.oz - c(2)
+    val sx = r.ox - ax; val sy = r.oy - ay; val sz = r.oz - az
     val u = dot(sx, sy, sz, px, py, pz) * inv
     val qx = crossX(sy, sz, e1y, e1z); val qy = crossY(sx, sz, e1x, e1z); val qz = crossZ(sx, sy, e1x, e1y)
     val v = dot(r.dx, r.dy, r.dz, qx, qy, qz) * inv

@@ -25,24 +25,46 @@ final class RayStats {
   * t = +inf, u = v = 0), never a plausible wrong hit.
   */
 final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
-  private val p = img.p
-  private val m = p.m
-  private val codec = img.codec
-  private val sRef = new Array[Int](p.stackDepth); private val sT = new Array[Float](p.stackDepth)
-  private val sLvl = new Array[Int](p.stackDepth)
-  private val cRef = new Array[Int](m); private val cT = new Array[Float](m)
-  private val tri = new RayTriangle.Result
-  private var slot = 0
+  // The hot loop reads the image's word arrays directly and keeps its state in private[this] fields and
+  // locals: no allocation and no closure per ray, node or primitive (docs/architecture.md, "reference model speed").
+  private[this] val p = img.p
+  private[this] val m = p.m
+  private[this] val codec = img.codec
+  private[this] val nodes = img.nodes; private[this] val nodeWords = img.nodeWords
+  private[this] val prims = img.prims; private[this] val primWords = img.primWords
+  private[this] val faulty = faults.enabled
+  private[this] val sRef = new Array[Int](p.stackDepth); private[this] val sT = new Array[Float](p.stackDepth)
+  private[this] val sLvl = new Array[Int](p.stackDepth)
+  private[this] val cRef = new Array[Int](m); private[this] val cT = new Array[Float](m)
+  private[this] val tri = new RayTriangle.Result
+  private[this] val r = new PreparedRay(0f, 0f, 0f, 1f, 1f, 1f, 0f, 0f) // the current ray, set per ray
   // BOX_FORMAT narrower than fp32: the hardware's outward-rounded slab test (null: the fp32 test)
-  private val outward = if (p.boxFormat == rtaccel.fp.FpFormat.fp32) null else new RayBoxOutward(p.boxFormat, p.boxSlackUlps)
-  private val coord: Int => Float = k => img.primCoord(slot, k)
+  private[this] val outward = if (p.boxFormat == rtaccel.fp.FpFormat.fp32) null else new RayBoxOutward(p.boxFormat, p.boxSlackUlps)
+  // fp32 boxes without a NaN word and without slack: a regular ray can take RayBox.testRegular (the same result, bit for bit)
+  private[this] val slack = p.boxSlackUlps // TRI_TEST=watertight widens every box (RayBox.test's slack)
+  private[this] val nanFreeBoxes = outward == null && slack == 0 && {
+    var ok = true; var w = 0
+    while (ok && w < nodes.length) { // box words only: child j's min, max at 7j .. 7j+5 (a ref may look like a NaN)
+      val q = w % nodeWords
+      if (q < 7 * m && q % 7 != 6) ok = !f(nodes(w)).isNaN
+      w += 1
+    }
+    ok
+  }
+  private[this] var regular = false // the current ray takes the fast box test
+  // the current ray's counters, added to the caller's RayStats when the ray is done (record)
+  private[this] var nodeFetches = 0L; private[this] var leafFetches = 0L; private[this] var primTests = 0L
+  private[this] var boxTests = 0L; private[this] var maxStack = 0
+  private[this] var primBytes = 0L // DRAM bytes of the leaves fetched (PlatformParams.leafBytes)
+  // the closest hit found so far in the current ray's leaves, and whether a primitive read failed
+  private[this] var hitPrim = -1; private[this] var hitU = 0f; private[this] var hitV = 0f; private[this] var primError = false
   // TRI_TEST=watertight: the sheared-edge test (null: Möller–Trumbore)
-  private val slack = p.boxSlackUlps
-  private val watertight = if (p.triTest == rtaccel.config.TriTest.Watertight) new RayTriangleWatertight else null
+  private[this] val watertight = if (p.triTest == rtaccel.config.TriTest.Watertight) new RayTriangleWatertight else null
 
   def traceAll(rays: Rays, sink: AccessSink = AccessSink.none, stats: RayStats = new RayStats): Hits = {
     val h = Hits.empty(rays.count)
-    for (i <- 0 until rays.count) trace(i, rays, h, sink, stats)
+    var i = 0
+    while (i < rays.count) { trace(i, rays, h, sink, stats); i += 1 }
     h
   }
 
@@ -53,15 +75,21 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   // Short stack with restart (docs/architecture.md, "short stack with restart"): a ring of p.shortStack
   // entries that overwrites its oldest entry, and a trail of finished children per level. A push never fails;
   // when the ring runs dry after it dropped entries, traversal restarts at the root and follows the trail.
-  private val ringRef = new Array[Int](math.max(1, p.shortStack)); private val ringT = new Array[Float](math.max(1, p.shortStack))
-  private val ringLvl = new Array[Int](math.max(1, p.shortStack))
-  private var trail = new Array[Int](64)
+  private[this] val ringRef = new Array[Int](math.max(1, p.shortStack)); private[this] val ringT = new Array[Float](math.max(1, p.shortStack))
+  private[this] val ringLvl = new Array[Int](math.max(1, p.shortStack))
+  private[this] var trail = new Array[Int](64)
+
+  /** Makes ray i the current ray and clears its counters and closest hit. */
+  private def start(i: Int, rays: Rays): Unit = {
+    r.set(rays.data, i); regular = nanFreeBoxes && r.regular
+    nodeFetches = 0L; leafFetches = 0L; primTests = 0L; boxTests = 0L; maxStack = 0; primBytes = 0L
+    hitPrim = -1; hitU = 0f; hitV = 0f; primError = false
+  }
 
   private def traceShort(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
-    val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
+    start(i, rays)
     val cap = p.shortStack
     var tmax = r.tmax
-    leaf.reset()
     var n = 0; var head = 0 // entries in the ring; head = slot of the next push
     var dropped = false
     java.util.Arrays.fill(trail, 0)
@@ -75,10 +103,10 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
       var descended = false
       if (!codec.isPrim(cur)) {
         val id = codec.nodeId(cur)
-        sink.node(i, id, curLevel); st.nodeFetches += 1
-        val bad = faults.nodeBad(id) // as the full stack: no child of a poisoned node is trusted
+        sink.node(i, id, curLevel); nodeFetches += 1
+        val bad = faulty && faults.nodeBad(id) // as the full stack: no child of a poisoned node is trusted
         if (bad) readError = true
-        val k = if (bad) 0 else hitChildren(r, tmax, id, st)
+        val k = if (bad) 0 else hitChildren(tmax, id)
         val skip = trail(curLevel) // children finished on earlier passes (0 on a first visit)
         if (skip < k) {
           var q = k - 1
@@ -88,10 +116,10 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
             if (n == cap) dropped = true else n += 1
             q -= 1
           }
-          if (n > st.maxStack) st.maxStack = n
+          if (n > maxStack) maxStack = n
           cur = cRef(skip); curLevel += 1; descended = true
         } // else: every hit child is finished, so is this node (below: pop, restart or end)
-      } else tmax = testLeaf(i, r, cur, curLevel, tmax, sink, st)
+      } else tmax = testLeaf(i, cur, curLevel, tmax, sink)
       if (!descended) {
         // the subtree at curLevel is done: take the next pending sibling (newest first), or restart
         var next = false
@@ -111,69 +139,71 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
         }
       }
     }
-    record(i, out, st, tmax, overflowed = false, readError || leaf.readError)
+    record(i, out, st, tmax, overflowed = false, readError || primError)
   }
 
   private def traceFull(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
-    val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
+    start(i, rays)
     var tmax = r.tmax
-    leaf.reset()
     var sp = 0
     var overflowed = false; var readError = false
     var cur = 0; var curLevel = 0; var hasCur = true // root node: ref 0 means node id 0
     while (hasCur) {
       if (!codec.isPrim(cur)) {
         val id = codec.nodeId(cur)
-        sink.node(i, id, curLevel); st.nodeFetches += 1
-        val bad = faults.nodeBad(id) // no child of a poisoned node is trusted
+        sink.node(i, id, curLevel); nodeFetches += 1
+        val bad = faulty && faults.nodeBad(id) // no child of a poisoned node is trusted
         if (bad) readError = true
-        val k = if (bad) 0 else hitChildren(r, tmax, id, st)
+        val k = if (bad) 0 else hitChildren(tmax, id)
         var q = k - 1
         while (q >= 1) {
           if (sp == sRef.length) overflowed = true // dropped, as the TU drops it
           else { sRef(sp) = cRef(q); sT(sp) = cT(q); sLvl(sp) = curLevel + 1; sp += 1 }
           q -= 1
         }
-        if (sp > st.maxStack) st.maxStack = sp
+        if (sp > maxStack) maxStack = sp
         if (k > 0) { cur = cRef(0); curLevel += 1 } else hasCur = false
-      } else { tmax = testLeaf(i, r, cur, curLevel, tmax, sink, st); hasCur = false }
+      } else { tmax = testLeaf(i, cur, curLevel, tmax, sink); hasCur = false }
       while (!hasCur && sp > 0) {
         sp -= 1
         if (!(sT(sp) > tmax)) { cur = sRef(sp); curLevel = sLvl(sp); hasCur = true }
       }
     }
-    record(i, out, st, tmax, overflowed, readError || leaf.readError)
+    record(i, out, st, tmax, overflowed, readError || primError)
   }
 
-  /** Writes ray i's hit record: a fault record (a read error wins over an overflow), the closest hit, or a miss. */
+  /** Writes ray i's hit record: a fault record (a read error wins over an overflow), the closest hit, or a miss;
+    * adds the ray's counters to `st`.
+    */
   private def record(i: Int, out: Hits, st: RayStats, tmax: Float, overflowed: Boolean, readError: Boolean): Unit = {
+    st.nodeFetches += nodeFetches; st.leafFetches += leafFetches; st.primTests += primTests; st.boxTests += boxTests; st.primBytes += primBytes
+    if (maxStack > st.maxStack) st.maxStack = maxStack
     if (overflowed) st.overflows += 1
     if (readError) st.readErrors += 1
     if (readError || overflowed) {
       out.t(i) = Float.PositiveInfinity; out.prim(i) = if (readError) Hits.ReadError else Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f
     }
-    else if (leaf.prim >= 0) { out.t(i) = tmax; out.prim(i) = leaf.prim; out.u(i) = leaf.u; out.v(i) = leaf.v }
-  }
-
-  /** The closest hit found so far in the current ray's leaves, and whether a primitive read failed. */
-  private object leaf {
-    var prim = -1; var u = 0f; var v = 0f; var readError = false
-    def reset(): Unit = { prim = -1; u = 0f; v = 0f; readError = false }
+    else if (hitPrim >= 0) { out.t(i) = tmax; out.prim(i) = hitPrim; out.u(i) = hitU; out.v(i) = hitV }
   }
 
   /** Tests the primitives of leaf `ref` in slot order against [tmin, tmax); a hit closer than tmax becomes
-    * `leaf`'s closest (an equal t keeps the earlier one); a poisoned primitive is not hit and flags the ray.
+    * the closest (an equal t keeps the earlier one); a poisoned primitive is not hit and flags the ray.
     * Returns the new tmax.
     */
-  private def testLeaf(i: Int, r: PreparedRay, ref: Int, level: Int, tmax0: Float, sink: AccessSink, st: RayStats): Float = {
+  private def testLeaf(i: Int, ref: Int, level: Int, tmax0: Float, sink: AccessSink): Float = {
     val first = codec.firstPrim(ref); val n = codec.count(ref)
-    sink.leaf(i, first, n, level); st.leafFetches += 1; st.primBytes += p.leafBytes(n)
+    sink.leaf(i, first, n, level); leafFetches += 1; primTests += n; primBytes += p.leafBytes(n)
     var tmax = tmax0
     var s = first
     while (s < first + n) {
-      slot = s; st.primTests += 1
-      if (faults.primBad(s)) leaf.readError = true
-      else if (if (watertight == null) RayTriangle.test(r, tmax, coord, tri) else watertight.test(r, tmax, coord, tri)) { tmax = tri.t; leaf.prim = img.primId(s); leaf.u = tri.u; leaf.v = tri.v }
+      val w = s * primWords // v0, v1, v2 as float bits, then the scene triangle id (MemoryImage)
+      if (faulty && faults.primBad(s)) primError = true
+      else if (if (watertight == null) RayTriangle.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)),
+            f(prims(w + 4)), f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)
+          else watertight.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)), f(prims(w + 4)),
+            f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)) {
+        tmax = tri.t; hitPrim = prims(w + 9); hitU = tri.u; hitV = tri.v
+      }
       s += 1
     }
     tmax
@@ -182,24 +212,26 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   /** Slab-tests the non-empty children of node `id` and leaves the hit ones in cRef/cT sorted by entry
     * distance (stable: equal distances keep slot order); returns how many hit.
     */
-  private def hitChildren(r: PreparedRay, tmax: Float, id: Int, st: RayStats): Int = {
+  private def hitChildren(tmax: Float, id: Int): Int = {
     var k = 0; var j = 0
+    var w = id * nodeWords // child j: min x,y,z, max x,y,z (float bits), ref at w .. w+6 (MemoryImage)
     while (j < m) {
-      val ref = img.childRef(id, j)
+      val ref = nodes(w + 6)
       if (!codec.isEmpty(ref)) {
-        st.boxTests += 1
-        val tn = if (outward == null) RayBox.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5), slack)
-          else outward.test(r, tmax, box(id, j, 0), box(id, j, 1), box(id, j, 2), box(id, j, 3), box(id, j, 4), box(id, j, 5))
+        boxTests += 1
+        val tn = if (regular) RayBox.testRegular(r, tmax, f(nodes(w)), f(nodes(w + 1)), f(nodes(w + 2)), f(nodes(w + 3)), f(nodes(w + 4)), f(nodes(w + 5)))
+          else if (outward == null) RayBox.test(r, tmax, f(nodes(w)), f(nodes(w + 1)), f(nodes(w + 2)), f(nodes(w + 3)), f(nodes(w + 4)), f(nodes(w + 5)), slack)
+          else outward.test(r, tmax, f(nodes(w)), f(nodes(w + 1)), f(nodes(w + 2)), f(nodes(w + 3)), f(nodes(w + 4)), f(nodes(w + 5)))
         if (!tn.isNaN) {
           var pos = k
           while (pos > 0 && cT(pos - 1) > tn) { cRef(pos) = cRef(pos - 1); cT(pos) = cT(pos - 1); pos -= 1 }
           cRef(pos) = ref; cT(pos) = tn; k += 1
         }
       }
-      j += 1
+      j += 1; w += 7
     }
     k
   }
 
-  @inline private def box(id: Int, j: Int, q: Int): Float = java.lang.Float.intBitsToFloat(img.childWord(id, j, q))
+  @inline private def f(bits: Int): Float = java.lang.Float.intBitsToFloat(bits)
 }

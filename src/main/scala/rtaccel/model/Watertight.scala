@@ -28,19 +28,24 @@ final class RayTriangleWatertight {
     if (e != 0f) e else (a.toDouble * b.toDouble - c.toDouble * d.toDouble).toFloat
   }
 
-  def test(r: PreparedRay, tmax: Float, c: Int => Float, out: RayTriangle.Result): Boolean = {
+  def test(r: PreparedRay, tmax: Float, c: Int => Float, out: RayTriangle.Result): Boolean =
+    test(r, tmax, c(0), c(1), c(2), c(3), c(4), c(5), c(6), c(7), c(8), out)
+
+  /** The same test on v0 = (ax, ay, az), v1 = (bx, by, bz), v2 = (cx, cy, cz), as the traversal reads them. */
+  def test(r: PreparedRay, tmax: Float, ax0: Float, ay0: Float, az0: Float, bx0: Float, by0: Float, bz0: Float,
+           cx0: Float, cy0: Float, cz0: Float, out: RayTriangle.Result): Boolean = {
     val mx = mag(r.dx); val my = mag(r.dy); val mz = mag(r.dz)
     val kz = if (mx >= my && mx >= mz) 0 else if (my >= mz) 1 else 2
     val kx = (kz + 1) % 3; val ky = (kx + 1) % 3
     val sz = pick(kz, r.ix, r.iy, r.iz)
     val sx = pick(kx, r.dx, r.dy, r.dz) * sz; val sy = pick(ky, r.dx, r.dy, r.dz) * sz
-    var v = 0
-    while (v < 3) {
-      val px = c(3 * v) - r.ox; val py = c(3 * v + 1) - r.oy; val pz = c(3 * v + 2) - r.oz
+    // vertex v relative to the origin, sheared into sv(3v .. 3v+2)
+    def shear(v: Int, x: Float, y: Float, z: Float): Unit = {
+      val px = x - r.ox; val py = y - r.oy; val pz = z - r.oz
       val k = pick(kz, px, py, pz)
       sv(3 * v) = pick(kx, px, py, pz) - sx * k; sv(3 * v + 1) = pick(ky, px, py, pz) - sy * k; sv(3 * v + 2) = sz * k
-      v += 1
     }
+    shear(0, ax0, ay0, az0); shear(1, bx0, by0, bz0); shear(2, cx0, cy0, cz0)
     val ax = sv(0); val ay = sv(1); val az = sv(2); val bx = sv(3); val by = sv(4); val bz = sv(5)
     val cx = sv(6); val cy = sv(7); val cz = sv(8)
     val eu = edge(cx, by, cy, bx); val ev = edge(ax, cy, ay, cx); val ew = edge(bx, ay, by, ax)
