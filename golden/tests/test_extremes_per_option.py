@@ -9,7 +9,8 @@ import pytest
 from golden.io import load_hits, load_rays
 from scenes import procedural
 
-from .test_reference_model import FIX, _edge_and_vertex_rays, _room_eyes, _write, model_trace, needs_model, run_check
+from .test_reference_model import (FIX, _edge_and_vertex_rays, _room_eyes, _write, axis_parallel_rays, model_trace,
+                                   needs_model, run_check)
 from golden.trace import embree_trace
 
 OPTIONS = [(b, t) for t in ("mt", "watertight") for b in ("fp32", "fp24", "fp16", "bf16")]
@@ -30,21 +31,9 @@ def _trace(tmp_path, tris, rays, box, tri, name, exhaustive=0):
 @pytest.mark.parametrize("box,tri", OPTIONS)
 def test_extreme_values_for_every_option(box, tri, tmp_path):
     room = procedural.triangles("cornell")
-    lo, hi = room.reshape(-1, 3).min(0), room.reshape(-1, 3).max(0)
     # axis-parallel rays whose other components are +0, -0 or subnormal, from points inside the room, some of them
     # exactly on the planes of the boxes inside it (the grid hits the room's own coordinates)
-    g = np.linspace(0.05, 0.95, 5, dtype=np.float32)
-    pts = np.array([lo + (hi - lo) * np.array([a, b, c], np.float32) for a in g for b in g for c in g], np.float32)
-    blocks = []
-    for axis in range(3):
-        for sign in (1.0, -1.0):
-            for other in (0.0, -0.0, SUBNORMAL, -SUBNORMAL):
-                dv = np.full(3, other, np.float32)
-                dv[axis] = sign
-                r = np.zeros((len(pts), 8), np.float32)
-                r[:, 0:3], r[:, 3:6], r[:, 7] = pts, dv, np.inf
-                blocks.append(r)
-    rays = np.concatenate(blocks)
+    pts, rays = axis_parallel_rays(room, 5, (0.0, -0.0, SUBNORMAL, -SUBNORMAL))
     hits, s = _trace(tmp_path, room, rays, box, tri, "axis", exhaustive=len(rays))
     assert (hits["prim"] >= 0).all(), f"{int((hits['prim'] < 0).sum())} axis-parallel rays left the closed room"
     assert s["lost_hits"] == 0, f"a box test lost hits on rays {s['lost_hit_rays']}"

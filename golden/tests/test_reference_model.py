@@ -156,19 +156,7 @@ def test_axis_parallel_rays_with_signed_zero_components(tmp_path):
     """Rays along ±x, ±y, ±z whose other components are +0 or -0, from a grid of points inside the room
     (including points on the boxes' face planes): no leak, agreement with Embree, and ±0 change nothing."""
     tris = procedural.triangles("cornell")
-    lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
-    g = np.linspace(0.05, 0.95, 7, dtype=np.float32)
-    pts = np.array([lo + (hi - lo) * np.array([a, b, c], np.float32) for a in g for b in g for c in g], np.float32)
-    rows = []
-    for axis in range(3):
-        for sign in (1.0, -1.0):
-            for zero in (0.0, -0.0):
-                d = np.full(3, zero, np.float32)
-                d[axis] = sign
-                r = np.zeros((len(pts), 8), np.float32)
-                r[:, 0:3], r[:, 3:6], r[:, 7] = pts, d, np.inf
-                rows.append(r)
-    rays = np.concatenate(rows)
+    pts, rays = axis_parallel_rays(tris, 7, (0.0, -0.0))
     tp, rp = _write(tmp_path, tris, rays)
     model, _ = model_trace(tp, rp, tmp_path / "m")
     assert (model["prim"] >= 0).all(), "an axis-parallel ray leaked out of the closed room"
@@ -177,6 +165,25 @@ def test_axis_parallel_rays_with_signed_zero_components(tmp_path):
         a, b = model[k:k + half], model[k + half:k + 2 * half]
         assert (a["prim"] == b["prim"]).all() and (a["t"].view(np.int32) == b["t"].view(np.int32)).all()
     assert run_check(tris, rays, embree_trace(tris, rays), model)["unexplained"] == 0
+
+
+def axis_parallel_rays(tris, n, others):
+    """Rays along ±x, ±y, ±z from an n^3 grid of points inside the mesh's bounds, the other two direction
+    components set to each value of `others` in turn: (points, rays), in blocks of len(points) rays per axis,
+    sign and value."""
+    lo, hi = tris.reshape(-1, 3).min(0), tris.reshape(-1, 3).max(0)
+    g = np.linspace(0.05, 0.95, n, dtype=np.float32)
+    pts = np.array([lo + (hi - lo) * np.array([a, b, c], np.float32) for a in g for b in g for c in g], np.float32)
+    rows = []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            for other in others:
+                d = np.full(3, other, np.float32)
+                d[axis] = sign
+                r = np.zeros((len(pts), 8), np.float32)
+                r[:, 0:3], r[:, 3:6], r[:, 7] = pts, d, np.inf
+                rows.append(r)
+    return pts, np.concatenate(rows)
 
 
 def _float64_valid(tris, rays, hits, tol=1e-4):
