@@ -1,7 +1,7 @@
 """dse.plot_roofline on a synthetic roofline.csv (the layout of rtaccel.cli.RooflineCmd)."""
+import matplotlib.image
 import numpy as np
 import pytest
-from PIL import Image
 
 from dse import plot_roofline
 
@@ -26,9 +26,9 @@ def test_sweep_png(tmp_path):
     write(csv, [row(8, 3.1e5, "latency"), row(16, 6.0e5, "latency"), row(32, 9.96e5, "memory")])
     out = tmp_path / "roofline.png"
     plot_roofline.main(str(out), str(csv))
-    img = np.asarray(Image.open(out).convert("L"))
+    img = matplotlib.image.imread(str(out))[..., :3].mean(axis=2)
     assert img.shape[0] > 300 and img.shape[1] > 800
-    assert (img < 128).mean() > 0.01  # curves, labels and the footer were drawn, not a blank canvas
+    assert (img < 0.5).mean() > 0.01  # curves, labels and the footer were drawn, not a blank canvas
 
 
 def test_one_configuration_png(tmp_path):
@@ -36,7 +36,7 @@ def test_one_configuration_png(tmp_path):
     write(csv, [row(32, 9.96e5, "memory")])
     out = tmp_path / "one.png"
     plot_roofline.main(str(out), str(csv))
-    assert Image.open(out).size[0] > 800
+    assert matplotlib.image.imread(str(out)).shape[1] > 800
 
 
 def test_no_rows_is_one_error(tmp_path):

@@ -42,7 +42,7 @@ object RooflineCmd {
     val base = Cli.params(a)
     val label = a.get("scene-label", a.need("tris"))
     val list = tusList(a.get("tus-list", "")) match { case Seq() => Seq(base.tus); case l => l }
-    val build = a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named).getOrElse(rtaccel.sim.VerilatorBuild.default)
+    val build = a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named)
     val points = list.zipWithIndex.map { case (t, i) =>
       val b = Cli.build(scene, base.copy(tus = t), a)
       System.err.println(s"[roofline] $label: TUS=$t (${i + 1} of ${list.length}), ${rays.count} rays")

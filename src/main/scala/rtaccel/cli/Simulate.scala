@@ -63,7 +63,7 @@ object Simulate {
   final case class SimOptions(label: String, memJitter: Int = 0, hostStall: Int = 0, seed: Int = 1,
                               work: String = "build/sim", maxCycles: Option[Long] = None, scaleExp: Int = 0,
                               memErrorRate: Double = 0.0, waves: Option[(Long, Long)] = None,
-                              build: rtaccel.sim.VerilatorBuild = rtaccel.sim.VerilatorBuild.default) {
+                              build: Option[rtaccel.sim.VerilatorBuild] = None) { // None: VerilatorBuild.auto
     val errorThreshold: Int = rtaccel.model.MemFaults.threshold(memErrorRate)
   }
 
@@ -84,7 +84,7 @@ object Simulate {
     val b = Cli.build(scene, Cli.params(a), a)
     run(b, rays, SimOptions(a.get("scene-label", a.need("tris")), a.int("mem-jitter", 0), a.int("host-stall", 0),
       a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp, a.double("mem-error-rate", 0.0), wavesArg(a),
-      a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named).getOrElse(rtaccel.sim.VerilatorBuild.default)))
+      a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named)))
   }
 
   /** The hit stream as the host captured it, by ray id: each record, how often it came, its fault flags. */
@@ -139,6 +139,7 @@ object Simulate {
     // the RTL logs its access order only when a cache is present; it makes exactly the model's accesses
     val logCap = if (cached) SimSetup.pow2(math.max(SimSetup.logWords, accessRows.length / 5)) else 0
     val label = o.label
+    val build = o.build.getOrElse(rtaccel.sim.VerilatorBuild.auto(rays.count))
     val den = 1000
     val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
       bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
@@ -151,7 +152,7 @@ object Simulate {
       s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" + (if (o.errorThreshold > 0) s"-err${o.errorThreshold}" else "") +
       (if (p.shortStack > 0) s"-short${p.shortStack}.${p.treeLevels}" else "") +
       (if (p.boxFormat != rtaccel.fp.FpFormat.fp32) s"-box${p.boxFormat.name}" else "") +
-      s"-${o.build.name}" + (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +
+      s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "")
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
@@ -162,13 +163,13 @@ object Simulate {
     val setup = SimSetup(rayCap, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
       wordCap, dram, hostStallPercent = o.hostStall, seed = o.seed, accessLogCapacity = logCap)
     val maxCycles = o.maxCycles.getOrElse(1000000L + 200000L * rays.count)
-    System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build in $work")
+    System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build (${build.name}) in $work")
 
     var result: Outcome = null
     val t0 = System.nanoTime()
     val modelWall = (t0 - tModel) / 1e9 // the reference model, the memory image and the input files
     RawTester.test(new SimHarness(p, setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
-      CachingAnnotation) ++ o.build.annotations ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
+      CachingAnnotation) ++ build.annotations ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
       dut.clock.setTimeout(0)
       dut.io.readIdx.poke(0.U)
       dut.io.rayCount.poke(rays.count.U) // what the host's stream holds
@@ -231,7 +232,7 @@ object Simulate {
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
         "prim_bytes_per_ray" -> counters("prim_requests") * p.primAccessBytes / n,
         "mem_utilisation" -> counters("mem_busy_beats") * axi.beatBytes / (math.max(1, cycles) * peakBytesPerCycle),
-        "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall, "sim_build" -> o.build.name,
+        "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall, "sim_build" -> build.name,
         "sim_cycles_per_cpu_s" -> stepped / math.max(1e-9, simCpu), "sim_cpu_s" -> simCpu,
         // where the wall time went: model + inputs, simulator build (or cache load) + host setup, the run, readout and checks
         "wall_model_s" -> modelWall, "wall_build_s" -> (tSim - t0) / 1e9, "wall_readout_s" -> (System.nanoTime() - tEnd) / 1e9,

@@ -20,19 +20,30 @@ final case class VerilatorBuild(name: String, verilatorFlags: Seq[String], cFlag
 }
 
 object VerilatorBuild {
-  /** What make simulate used until the profiles existed: -CFLAGS -O1 (the hot code stayed at Verilator's -Os). */
+  /** What make simulate used until the profiles existed: -CFLAGS -O1 (the hot code stays at Verilator's -Os,
+    * OPT_FAST, which the generated makefile puts after -CFLAGS). Quickest to build.
+    */
   val legacy: VerilatorBuild = VerilatorBuild("o1", Nil, Seq("-O1"), None)
-  private val experimental: Seq[VerilatorBuild] = Seq(
+  /** Verilator's -O3 (its slow optimisations: every module inlined, `--inline-mult -1`): the quickest model
+    * measured (docs/platform.md, "Simulation speed"), at a longer build.
+    */
+  val fast: VerilatorBuild = VerilatorBuild("fast", Seq("-O3"), Seq("-O1"), None)
+  /** Tried and measured (docs/platform.md), kept so that the comparison can be rerun with SIM_BUILD=<name>. */
+  private val tried: Seq[VerilatorBuild] = Seq(
     VerilatorBuild("xfast", Seq("--x-assign", "fast", "--x-initial", "fast"), Seq("-O1"), None),
     VerilatorBuild("os2", Nil, Seq("-O1"), Some("-O2")),
     VerilatorBuild("os3", Nil, Seq("-O1"), Some("-O3")),
-    VerilatorBuild("vo3", Seq("-O3"), Seq("-O1"), None),
-    VerilatorBuild("thr2", Seq("--threads", "2"), Seq("-O1"), None),
     VerilatorBuild("split", Seq("--output-split", "5000", "--output-split-cfuncs", "5000"), Seq("-O1"), None),
-    VerilatorBuild("best", Seq("--x-assign", "fast", "--x-initial", "fast"), Seq("-O1"), Some("-O2")))
-  val all: Seq[VerilatorBuild] = legacy +: experimental
-  /** The profile make simulate builds with. */
-  val default: VerilatorBuild = legacy
+    VerilatorBuild("thr2", Seq("--threads", "2"), Seq("-O1"), None))
+  val all: Seq[VerilatorBuild] = Seq(legacy, fast) ++ tried
+
+  /** Runs with at least this many rays build `fast`: only a long run wins back -O3's longer build (the test
+    * suites' runs, a few hundred rays each, keep the quick build).
+    */
+  val fastFromRays: Int = 1 << 18
+
+  /** The profile of a run of `rays` rays when SIM_BUILD is not given. */
+  def auto(rays: Int): VerilatorBuild = if (rays >= fastFromRays) fast else legacy
 
   def named(n: String): VerilatorBuild = all.find(_.name == n).getOrElse(
     throw new rtaccel.io.InputError(s"SIM_BUILD must be one of ${all.map(_.name).mkString(", ")} (got '$n')"))
