@@ -8,12 +8,12 @@ from dse import plot_roofline
 HEADER = ("tus,rays,cycles,rays_per_s,memory_bound,compute_bound,compute_bound_box,compute_bound_tri,roofline_fraction,"
           "binding,nearest_roof,dram_bytes_per_ray,box_jobs_per_ray,tri_jobs_per_ray,util_memory,util_iu,util_tu,"
           "stall_iu_arbitration,stall_memory_data,stall_memory_request,node_cache_miss_rate,prim_cache_miss_rate,ius,"
-          "mem_channels,sim_cycles_per_wall_s,sim_wall_s")
+          "mem_channels,sim_build,wall_build_s,sim_cycles_per_wall_s,sim_cycles_per_cpu_s,sim_wall_s")
 
 
 def row(tus, rate, binding):
     return (f"{tus},70044,{int(70044 / rate * 150e6)},{rate},1272000,1573000,1840000,10830000,{rate / 1272000:.4f},{binding},"
-            f"memory,471.6,20.37,6.92,{rate / 1272000:.4f},{rate / 1573000:.4f},0.95,0.4,0.36,0.0001,0.011,,1,1,160000,60")
+            f"memory,471.6,20.37,6.92,{rate / 1272000:.4f},{rate / 1573000:.4f},0.95,0.4,0.36,0.0001,0.011,,1,1,o1,140,80000,160000,60")
 
 
 def write(path, rows):

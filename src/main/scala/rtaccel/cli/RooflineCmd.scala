@@ -12,7 +12,8 @@ object RooflineCmd {
   val columns: Seq[String] = Seq("tus", "rays", "cycles", "rays_per_s", "memory_bound", "compute_bound", "compute_bound_box",
     "compute_bound_tri", "roofline_fraction", "binding", "nearest_roof", "dram_bytes_per_ray", "box_jobs_per_ray", "tri_jobs_per_ray",
     "util_memory", "util_iu", "util_tu", "stall_iu_arbitration", "stall_memory_data", "stall_memory_request",
-    "node_cache_miss_rate", "prim_cache_miss_rate", "ius", "mem_channels", "sim_cycles_per_wall_s", "sim_wall_s")
+    "node_cache_miss_rate", "prim_cache_miss_rate", "ius", "mem_channels", "sim_build", "wall_build_s", "sim_cycles_per_wall_s",
+    "sim_cycles_per_cpu_s", "sim_wall_s")
 
   /** "8 16 32" or "8,16,32": the TU counts of a sweep (empty: the configuration's own TUS). */
   def tusList(s: String): Seq[Int] = s.split("[ ,]+").filter(_.nonEmpty).map(t => t.toIntOption.filter(_ >= 1).getOrElse(
@@ -24,7 +25,8 @@ object RooflineCmd {
     def miss(c: String): ujson.Value = j(c).obj.get("miss_rate").getOrElse(ujson.Null)
     ujson.Obj.from(Seq("tus" -> j("tus"), "rays" -> j("rays"), "cycles" -> j("cycles")) ++ r.toSeq ++
       Seq("node_cache_miss_rate" -> miss("node_cache"), "prim_cache_miss_rate" -> miss("prim_cache"),
-        "sim_cycles_per_wall_s" -> j("sim_cycles_per_wall_s"), "sim_wall_s" -> j("sim_wall_s")))
+        "sim_build" -> j("sim_build"), "wall_build_s" -> j("wall_build_s"), "sim_cycles_per_wall_s" -> j("sim_cycles_per_wall_s"),
+        "sim_cycles_per_cpu_s" -> j("sim_cycles_per_cpu_s"), "sim_wall_s" -> j("sim_wall_s")))
   }
 
   def cell(v: ujson.Value): String = v match {
