@@ -32,10 +32,12 @@ object Roofline {
     IuRates(g.nodeBeats, g.primBeats)
   }
 
-  /** A run reaches a roof when it achieves at least this share of it; below, neither roof binds: the TUs (one
-    * request in flight each) cannot cover the memory and pipeline latency, and the run is latency-bound.
+  /** A run reaches a roof when it achieves at least this share of it; below, neither roof binds: the requests
+    * in flight (one per TU, at most hw.iuOutstanding jobs in the IU) cannot cover the memory and pipeline
+    * latency, and the run is latency-bound (docs/roofline.md: sponza and conference stop at 78 % of the memory
+    * roof with DRAM never refusing a read, which is this case).
     */
-  val bindsAt: Double = 0.6
+  val bindsAt: Double = 0.8
 
   /** The counters of one run that the roofline reads (names of RtAccelTop.counterNames). */
   final case class Run(rays: Long, cycles: Long, nodeRequests: Long, primRequests: Long, memBusyBeats: Long, tuBusyCycles: Long,

@@ -31,6 +31,10 @@ class RooflineSpec extends AnyFunSuite {
     val lat = Roofline.of(p, run(100, 50000, nodes = 1000, prims = 500, beats = 10))
     assert(lat.binding == "latency" && math.abs(lat.fraction.get - 0.1) < 1e-12)
     assert(lat.json("nearest_roof").str == "compute" && lat.json("binding").str == "latency")
+    // either side of the 80 % line: 128 000 B moved in 40 000 cycles is 80 % of the memory roof
+    assert(Roofline.bindsAt == 0.8)
+    assert(Roofline.of(p, run(1000, 40000, nodes = 1000, prims = 1000, beats = 4000)).binding == "memory")
+    assert(Roofline.of(p, run(1000, 40001, nodes = 1000, prims = 1000, beats = 4000)).binding == "latency")
   }
 
   test("a ray that needs no memory has no memory bound (null in the JSON), not a division by zero") {
