@@ -34,8 +34,8 @@ object Roofline {
 
   /** A run reaches a roof when it achieves at least this share of it; below, neither roof binds: the requests
     * in flight (one per TU, at most hw.iuOutstanding jobs in the IU) cannot cover the memory and pipeline
-    * latency, and the run is latency-bound (docs/roofline.md: sponza and conference stop at 78 % of the memory
-    * roof with DRAM never refusing a read, which is this case).
+    * latency, and the run is latency-bound (docs/roofline.md: sponza stops at 78 % of its memory roof with
+    * DRAM never refusing a read, which is this case; conference reaches 90 % of its memory roof).
     */
   val bindsAt: Double = 0.8
 
