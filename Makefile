@@ -32,10 +32,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area area-fp cost-model max-tus lint simulate soak regress paper-nocache paper-caches bench-caches dse precision fidelity
+        yosys verilog area area-fp cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -200,12 +200,31 @@ lint: verilog verilator
 
 SIM_ARGS = $(if $(MEM_JITTER),--mem-jitter $(MEM_JITTER)) $(if $(HOST_STALL),--host-stall $(HOST_STALL)) \
   $(if $(MEM_ERROR_RATE),--mem-error-rate $(MEM_ERROR_RATE)) $(if $(WAVES),--waves $(WAVES)) \
-  $(if $(WAVES_FROM),--waves-from $(WAVES_FROM)) $(if $(WAVES_TO),--waves-to $(WAVES_TO))
+  $(if $(WAVES_FROM),--waves-from $(WAVES_FROM)) $(if $(WAVES_TO),--waves-to $(WAVES_TO)) $(if $(SIM_BUILD),--sim-build $(SIM_BUILD))
 # Exit status: 0 every check held, 2 bad input, 3 ran but a check failed (the JSON line and outputs remain).
 simulate: deps
 	@$(RAYS_OR_GOLDEN); OUT=$${OUT:-build/simulate/$$(basename $(SCENE))}; T=$(TRIS) || exit $$?; \
 	  $(JAVA) rtaccel.cli.Simulate --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT $(MODEL_ARGS) $(SIM_ARGS); rc=$$?; \
 	  if [ $$rc -eq 0 ] || [ $$rc -eq 3 ]; then $(IMAGE); fi; exit $$rc
+
+# The roofline of RTL runs (docs/roofline.md): achieved rays/s against the memory bound (sustained bandwidth / DRAM
+# bytes per ray after the caches) and the compute bound (IU beats per cycle / beats per ray), for the knobs given
+# or for each TU count of ROOFLINE_TUS. Without GOLDEN, a ROOFLINE_WIDTH x ROOFLINE_HEIGHT frame with DEPTH bounces
+# is made (and kept) in build/roofline/<scene>/golden/. OUT/roofline.csv + roofline.png; JSON last line.
+ROOFLINE_TUS ?=
+ROOFLINE_WIDTH ?= 128
+ROOFLINE_HEIGHT ?= 96
+roofline: deps
+	@s=$(SCENE); [ -f "$$s" ] || { echo "error: scene '$$s' not found; give SCENE=<path to .obj or .ply>" >&2; exit 2; }; \
+	  n=$$(basename $$s .obj); n=$$(basename $$n .ply); OUT=$${OUT:-build/roofline/$$n}; \
+	  if [ -n "$(GOLDEN)" ]; then G=$(GOLDEN); [ -f "$$G/rays.npy" ] || { echo "error: GOLDEN=$$G has no rays.npy; give a folder made by make golden" >&2; exit 2; }; \
+	  else G=build/roofline/$$n/golden/$(ROOFLINE_WIDTH)x$(ROOFLINE_HEIGHT)-d$(DEPTH)-s$(SEED); \
+	    [ "$$G/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=$(ROOFLINE_WIDTH) HEIGHT=$(ROOFLINE_HEIGHT) >/dev/null || exit $$?; fi; \
+	  T=$$(tools/tris $$s) || exit $$?; \
+	  J=$$($(JAVA) rtaccel.cli.RooflineCmd --tris "$$T" --scene-label $$s --rays $$G/rays.npy --out $$OUT $(MODEL_ARGS) \
+	    $(if $(strip $(ROOFLINE_TUS)),--tus-list "$(strip $(ROOFLINE_TUS))") $(if $(SIM_BUILD),--sim-build $(SIM_BUILD)) | tail -n 1; exit $${PIPESTATUS[0]}); rc=$$?; \
+	  if [ $$rc -ne 0 ]; then [ -z "$$J" ] || echo "$$J"; exit $$rc; fi; \
+	  $(PY) -m dse.plot_roofline $$OUT/roofline.png $$OUT/roofline.csv || exit $$?; echo "$$J"
 
 # At least RAYS_N rays (a 1000-wide camera frame of the embedded room) through the RTL in one run, with random
 # DRAM latency and host backpressure: 0 lost, 0 duplicated, 0 mismatches, or exit 3. A benchmark, not a test.

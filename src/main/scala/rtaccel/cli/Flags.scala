@@ -47,9 +47,12 @@ object Flags {
     f("work", "simulator build folder"), f("max-cycles", "cycle limit (a run that reaches it timed out)"),
     f("mem-error-rate", "share of DRAM beats answered with SLVERR (MEM_ERROR_RATE, 0..1)"),
     f("waves", "1 writes OUT/waves.vcd (WAVES=)"), f("waves-from", "first cycle of the waveform window"),
-    f("waves-to", "last cycle of the waveform window"))
+    f("waves-to", "last cycle of the waveform window"),
+    f("sim-build", "Verilator build profile (SIM_BUILD=, rtaccel.sim.VerilatorBuild)"))
   val simulate: Seq[Flag] = inputs ++ platform ++ simOptions :+ f("out", "output folder")
   val sweepTus: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts"))
+  val roofline: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts of a sweep (ROOFLINE_TUS=)"),
+    simOptions.find(_.name == "sim-build").get)
   val verilog: Seq[Flag] = platform :+ f("out", "output folder")
   val area: Seq[Flag] = verilog ++ Seq(f("fidelity", "yosys (a real synthesis) or model (the fitted cost model)"),
     f("unit", "one module to synthesize instead of the board top (UNIT=)"), f("cache", "synthesis cache folder"),

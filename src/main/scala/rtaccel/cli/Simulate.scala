@@ -5,7 +5,7 @@ import java.nio.file.{Files, Path, Paths}
 import chisel3._
 import chiseltest._
 import chiseltest.internal.CachingAnnotation
-import chiseltest.simulator.{VerilatorBackendAnnotation, VerilatorCFlags}
+import chiseltest.simulator.VerilatorBackendAnnotation
 import firrtl2.options.TargetDirAnnotation
 import rtaccel.bvh.MemoryImage
 import rtaccel.config.{HwLimits, PlatformParams}
@@ -63,7 +63,8 @@ object Simulate {
   /** Options of one run that do not change the platform. */
   final case class SimOptions(label: String, memJitter: Int = 0, hostStall: Int = 0, seed: Int = 1,
                               work: String = "build/sim", maxCycles: Option[Long] = None, scaleExp: Int = 0,
-                              memErrorRate: Double = 0.0, waves: Option[(Long, Long)] = None) {
+                              memErrorRate: Double = 0.0, waves: Option[(Long, Long)] = None,
+                              build: Option[rtaccel.sim.VerilatorBuild] = None) { // None: VerilatorBuild.auto
     val errorThreshold: Int = rtaccel.model.MemFaults.threshold(memErrorRate)
   }
 
@@ -83,7 +84,8 @@ object Simulate {
     val (scene, rays, scaleExp) = Cli.inputs(a)
     val b = Cli.build(scene, Cli.params(a), a)
     run(b, rays, SimOptions(a.get("scene-label", a.need("tris")), a.int("mem-jitter", 0), a.int("host-stall", 0),
-      a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp, a.double("mem-error-rate", 0.0), wavesArg(a)))
+      a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp, a.double("mem-error-rate", 0.0), wavesArg(a),
+      a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named)))
   }
 
   /** The hit stream as the host captured it, by ray id: each record, how often it came, its fault flags. */
@@ -130,13 +132,15 @@ object Simulate {
     val lay0 = ImageFile.layout(img, axi)
     // the poisoned beats the DRAM model will answer with SLVERR (MEM_ERROR_RATE), known to the model
     val faults = MemFaults(o.errorThreshold, o.seed, axi.beatBytes, p.nodeStrideBytes, lay0.primBaseBytes, p.primStrideBytes)
+    val tModel = System.nanoTime()
     val stats = new RayStats
     val rec = new AccessRecorder
     val model = new Traversal(img, faults).traceAll(rays, if (cached) rec else AccessSink.none, stats)
     val accessRows = rec.toArray
     // the RTL logs its access order only when a cache is present; it makes exactly the model's accesses
-    val logCap = if (cached) SimSetup.pow2(math.max(1, accessRows.length / 5)) else 0
+    val logCap = if (cached) SimSetup.pow2(math.max(SimSetup.logWords, accessRows.length / 5)) else 0
     val label = o.label
+    val build = o.build.getOrElse(rtaccel.sim.VerilatorBuild.auto(rays.count))
     val den = 1000
     val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
       bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
@@ -150,7 +154,7 @@ object Simulate {
       (if (p.shortStack > 0) s"-short${p.shortStack}.${p.treeLevels}" else "") +
       (if (p.boxFormat != rtaccel.fp.FpFormat.fp32) s"-box${p.boxFormat.name}" else "") +
       (if (p.triTest != rtaccel.config.TriTest.Mt) s"-tri${p.triTest.name}" else "") +
-      (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +
+      s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "")
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
@@ -161,12 +165,13 @@ object Simulate {
     val setup = SimSetup(rayCap, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
       wordCap, dram, hostStallPercent = o.hostStall, seed = o.seed, accessLogCapacity = logCap)
     val maxCycles = o.maxCycles.getOrElse(1000000L + 200000L * rays.count)
-    System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build in $work")
+    System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build (${build.name}) in $work")
 
     var result: Outcome = null
     val t0 = System.nanoTime()
+    val modelWall = (t0 - tModel) / 1e9 // the reference model, the memory image and the input files
     RawTester.test(new SimHarness(p, setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
-      VerilatorCFlags(Seq("-O1")), CachingAnnotation) ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
+      CachingAnnotation) ++ build.annotations ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
       dut.clock.setTimeout(0)
       dut.io.readIdx.poke(0.U)
       dut.io.rayCount.poke(rays.count.U) // what the host's stream holds
@@ -174,6 +179,9 @@ object Simulate {
       val host = new HostDriver(dut.io.lite, dut.clock)
       host.idle()
       val regs = HostSession.configure(host, p, layout.primBaseBytes, rays.count)
+      // CPU time of this thread (the model steps in it): cycles per CPU second hardly move with the machine's load
+      val threads = java.lang.management.ManagementFactory.getThreadMXBean
+      val cpuSim = threads.getCurrentThreadCpuTime
       val tSim = System.nanoTime()
       var stepped = 0L
       val chunk = 20000
@@ -187,13 +195,16 @@ object Simulate {
         }
       }
       dut.clock.step(256) // a hit beyond the batch would show up here as a duplicate
-      val simWall = (System.nanoTime() - tSim) / 1e9
+      val tEnd = System.nanoTime()
+      val simWall = (tEnd - tSim) / 1e9
+      val simCpu = (threads.getCurrentThreadCpuTime - cpuSim) / 1e9
       val received = dut.io.received.peek().litValue.toLong
       val finish = HostSession.finish(host)
       val counters = finish.counters
       val cycles = counters("batch_cycles")
       val rtl = readHits(dut, received, rays.count)
       val hits = rtl.hits
+      val tHits = System.nanoTime()
       val cmp = compare(rtl, model)
       import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree}
       val (rtlOverflow, rtlReadError) = (rtl.overflow, rtl.readError)
@@ -202,9 +213,17 @@ object Simulate {
       val logged = if (!cached) Array.empty[Int] else {
         val nLog = dut.io.logCount.peek().litValue.toInt
         if (nLog > logCap) throw new InputError(s"the RTL made $nLog accesses, more than the model's ${accessRows.length / 5}")
-        Array.tabulate(nLog) { k => dut.io.readIdx.poke(k.U); dut.io.logData.peek().litValue.toInt }
+        val w = SimSetup.logWords; val a = new Array[Int](nLog)
+        for (row <- 0 until (nLog + w - 1) / w) {
+          dut.io.readIdx.poke(row.U); val bits = dut.io.logData.peek().litValue
+          for (k <- 0 until math.min(w, nLog - row * w)) a(row * w + k) = ((bits >> (32 * k)) & 0xffffffffL).toLong.toInt
+        }
+        a
       }
+      val tLog = System.nanoTime()
       val cacheJson = CacheReport.simulate(p, counters, logged, accessRows, img.codec)
+      System.err.println(f"[simulate] readout: hits ${(tHits - tEnd) / 1e9}%.1f s, access log ${(tLog - tHits) / 1e9}%.1f s " +
+        f"(${logged.length} entries), cache check ${(System.nanoTime() - tLog) / 1e9}%.1f s")
       val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond
@@ -215,7 +234,10 @@ object Simulate {
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
         "prim_bytes_per_ray" -> counters("prim_requests") * p.primAccessBytes / n,
         "mem_utilisation" -> counters("mem_busy_beats") * axi.beatBytes / (math.max(1, cycles) * peakBytesPerCycle),
-        "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall,
+        "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall, "sim_build" -> build.name,
+        "sim_cycles_per_cpu_s" -> stepped / math.max(1e-9, simCpu), "sim_cpu_s" -> simCpu,
+        // where the wall time went: model + inputs, simulator build (or cache load) + host setup, the run, readout and checks
+        "wall_model_s" -> modelWall, "wall_build_s" -> (tSim - t0) / 1e9, "wall_readout_s" -> (System.nanoTime() - tEnd) / 1e9,
         "scene" -> label, "config" -> p.name, "tus" -> p.tus, "m" -> p.m, "mppl" -> p.mppl,
         "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "model_restarts" -> stats.restarts.toDouble, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
         "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
@@ -231,6 +253,8 @@ object Simulate {
         "dram_bytes_per_ray" -> counters("mem_busy_beats") * axi.beatBytes / n,
         "node_cache" -> cacheJson.node, "prim_cache" -> cacheJson.prim, "cache_counts_match_model" -> cacheJson.matches,
         "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> Cli.version)
+      json("roofline") = if (rays.count == 0 || cycles == 0) ujson.Null // docs/roofline.md
+        else rtaccel.perf.Roofline.of(p, rtaccel.perf.Roofline.Run.fromCounters(rays.count, counters)).json
       val failed = failures(json)
       json("ok") = failed.isEmpty; json("failures") = ujson.Arr.from(failed.map(ujson.Str(_)))
       result = Outcome(json, hits)

@@ -13,13 +13,18 @@ import rtaccel.top.{AxiLite, RtAccelTop}
   */
 final case class SimSetup(rayCapacity: Int, raysHex: String, imageHex: String, imageWords: Int,
                           dram: DramConfig, hostStallPercent: Int = 0, seed: Int = 1, accessLogCapacity: Int = 0) {
-  require(accessLogCapacity == 0 || Integer.bitCount(accessLogCapacity) == 1, "access log capacity must be 0 or a power of two")
+  require(accessLogCapacity == 0 || (Integer.bitCount(accessLogCapacity) == 1 && accessLogCapacity >= SimSetup.logWords),
+    s"access log capacity must be 0 or a power of two >= ${SimSetup.logWords}")
   require(rayCapacity >= 1 && Integer.bitCount(rayCapacity) == 1, "ray capacity must be a power of two")
   require(imageWords >= 1 && Integer.bitCount(imageWords) == 1, "image capacity must be a power of two")
   require(hostStallPercent >= 0 && hostStallPercent < 100, "host stall percentage must be 0..99")
 }
 
 object SimSetup {
+  /** Access-log entries read out per peek: the host reads a whole row of the log at a time, since every
+    * peek through the simulator interface costs microseconds and a scene run logs tens of millions of accesses.
+    */
+  val logWords = 16
   def pow2(n: Long): Int = { var c = 1L; while (c < n) c <<= 1; require(c <= (1 << 30), s"$n entries is too large to simulate"); c.toInt }
 }
 
@@ -30,7 +35,8 @@ object SimSetup {
   * (HostDriver) works from outside in the order docs/registers.md gives; `irq` is the board's interrupt.
   * Results are read out through `readIdx`/`readData` at the end.
   * With accessLogCapacity > 0 every child reference the MC accepts is logged in order (`logCount`, read out
-  * through `readIdx`/`logData`): the access order the caches saw, for replay through the trace model.
+  * through `readIdx`/`logData`, SimSetup.logWords entries per row): the access order the caches saw, for
+  * replay through the trace model.
   */
 class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   val top = Module(new RtAccelTop(p, tapAccesses = s.accessLogCapacity > 0))
@@ -43,7 +49,7 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val readIdx = Input(UInt(32.W))
     val readData = Output(UInt(RtAccelTop.HitBits.W))
     val logCount = Output(UInt(32.W))
-    val logData = Output(UInt(32.W))
+    val logData = Output(UInt((32 * SimSetup.logWords).W)) // entries readIdx * logWords .. + logWords - 1, the first lowest
   })
   val dram = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, s.dram, p.hw.dramQueueDepth))
   dram.io.axi <> top.io.mem
@@ -76,11 +82,14 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   io.logCount := logCount
   io.logData := 0.U
   top.io.tap.foreach { t =>
-    val log = Mem(s.accessLogCapacity, UInt(32.W))
+    val w = SimSetup.logWords
+    val log = Mem(s.accessLogCapacity / w, Vec(w, UInt(32.W)))
     when(t.valid) {
-      when(logCount < s.accessLogCapacity.U) { log(logCount) := t.bits }
+      when(logCount < s.accessLogCapacity.U) {
+        log.write(logCount >> log2Ceil(w), VecInit(Seq.fill(w)(t.bits)), UIntToOH(logCount(log2Ceil(w) - 1, 0), w).asBools)
+      }
       logCount := logCount + 1.U
     }
-    io.logData := log(io.readIdx)
+    io.logData := log(io.readIdx).asUInt
   }
 }

@@ -34,6 +34,14 @@ class SimulateSpec extends AnyFunSuite {
     val j = last(stdout)
     assert(j("ok").bool && j("failures").arr.isEmpty && j("status")("done").bool && !j("status")("busy").bool)
     assert(j("irq_done").bool && j("counters")("hits_out").num == 60 && j("counters")("rays_in").num == 60)
+    // the roofline of the run: its own rays/s, and no run beats either bound (each is a true ceiling of the RTL)
+    val r = j("roofline")
+    assert(r("rays_per_s").num == j("rays_per_s_at_clock").num)
+    assert(r("roofline_fraction").num > 0 && r("roofline_fraction").num <= 1.0, ujson.write(r))
+    assert(r("util_memory").num <= 1.0 && r("util_iu").num <= 1.0 && r("util_tu").num <= 1.0, ujson.write(r))
+    assert(Set("memory", "compute", "latency")(r("binding").str) && r("ius").num == 1 && r("mem_channels").num == 1)
+    assert(j("sim_build").str == "o1", "a run of 60 rays keeps the quick build")
+    assert(j("wall_build_s").num > 0 && j("sim_cycles_per_cpu_s").num > 0)
   }
 
   test("WAVES=1 writes the asked cycle window as a VCD: values at its first cycle, changes up to its last") {
@@ -50,6 +58,9 @@ class SimulateSpec extends AnyFunSuite {
     assert(w("changes").num > 0)
     val (c2, _, e2) = sim(dir.resolve("badwaves"), "--waves", "1", "--waves-from", "50", "--waves-to", "10")
     assert(c2 == 2 && e2.contains("WAVES_TO"), e2)
+    val (c3, _, e3) = sim(dir.resolve("badbuild"), "--sim-build", "o9")
+    assert(c3 == 2 && e3.contains("SIM_BUILD must be one of o1, fast"), e3)
+    assert(!Files.exists(dir.resolve("badbuild").resolve("hits.npy")))
   }
 
   test("short soak: the cornell fixture's golden rays at 8 TUs with a cache, DRAM jitter and host backpressure") {
@@ -60,9 +71,12 @@ class SimulateSpec extends AnyFunSuite {
     val so = new java.io.ByteArrayOutputStream(); val se = new java.io.ByteArrayOutputStream()
     val code = Console.withOut(so)(Console.withErr(se)(Cli.status(Array("--tris", d.resolve("tris.npy").toString,
       "--rays", d.resolve("golden/rays.npy").toString, "--out", out.toString, "--config", "paper2017", "--tus", "8",
-      "--node-cache", "256", "--mem-jitter", "31", "--host-stall", "35"), Flags.simulate)(Simulate.main0)))
+      "--node-cache", "256", "--mem-jitter", "31", "--host-stall", "35", "--sim-build", "fast"), Flags.simulate)(Simulate.main0)))
     val j = last(so.toString)
-    info(f"${j("rays").num}%.0f rays, ${j("cycles").num}%.0f cycles, ${j("sim_wall_s").num}%.1f s simulated")
+    info(f"${j("rays").num}%.0f rays, ${j("cycles").num}%.0f cycles, ${j("sim_wall_s").num}%.1f s simulated, build ${j("wall_build_s").num}%.0f s (${j("sim_build").str})")
+    // the long-run build profile (Verilator -O3) is as bit-exact as the quick one, caches and their access log included
     assert(code == 0 && j("mismatch_vs_model").num == 0 && j("lost").num == 0 && j("duplicated").num == 0, se.toString)
+    assert(j("sim_build").str == "fast" && j("cache_counts_match_model").bool, ujson.write(j))
+    assert(j("roofline")("roofline_fraction").num <= 1.0 && j("roofline")("util_memory").num <= 1.0, ujson.write(j("roofline")))
   }
 }

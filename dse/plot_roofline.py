@@ -1,0 +1,73 @@
+"""python -m dse.plot_roofline OUT.png CSV — make roofline: achieved rays/s against the memory and compute bounds.
+
+CSV is the `roofline.csv` of rtaccel.cli.RooflineCmd (one row per TU count). Left: rays/s of the RTL and the
+bounds (memory; compute with boxes and triangles alone) over the TUs; right: utilisation of memory, IU and TUs
+and the stall shares that say which bound binds (docs/roofline.md). The CSV's provenance line is the footer.
+"""
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from dse.common import parse_provenance, save_png  # noqa: E402
+
+BOUNDS = (("memory_bound", "memory bound", "C3", "-"), ("compute_bound", "compute bound (IU)", "C2", "-"),
+          ("compute_bound_box", "IU, boxes alone", "C2", ":"), ("compute_bound_tri", "IU, triangles alone", "C2", "--"))
+SHARES = (("util_memory", "memory (of sustained)", "C3", "o-"), ("util_iu", "IU beat port", "C2", "o-"),
+          ("util_tu", "TUs busy", "C0", "o-"), ("stall_iu_arbitration", "TU-cycles waiting for the IU", "C0", "x--"),
+          ("stall_memory_data", "IU cycles waiting for data", "C3", "x--"),
+          ("stall_memory_request", "cycles DRAM refused a read", "C1", "x:"))
+
+
+def read(path):
+    lines = Path(path).read_text().splitlines()
+    prov = [ln[1:].strip() for ln in lines if ln.startswith("#")]
+    rows = [ln for ln in lines if ln and not ln.startswith("#")]
+    if len(rows) < 2:
+        raise SystemExit(f"error: {path} has no data rows; rerun make roofline")
+    data = np.genfromtxt(rows, delimiter=",", names=True, dtype=None, encoding="utf-8")
+    return np.atleast_1d(data), prov
+
+
+def main(out, csv):
+    d, prov = read(csv)
+    kv = parse_provenance(prov[0]) if prov else {}
+    tus = d["tus"].astype(float)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11.5, 4.4))
+    for key, label, colour, style in BOUNDS:
+        v = np.array([np.nan if str(x) == "" else float(x) for x in d[key]])
+        a1.plot(tus, v, style, color=colour, label=label, marker="." if len(tus) == 1 else None)
+    a1.plot(tus, d["rays_per_s"], "ko-", label="achieved (RTL)")
+    for t, r, b in zip(tus, d["rays_per_s"], d["binding"]):
+        a1.annotate(str(b), (t, r), textcoords="offset points", xytext=(0, -12), ha="center", fontsize=7)
+    a1.set_yscale("log")
+    a1.set_ylabel(f"rays/s at {kv.get('clock_mhz', '?')} MHz")
+    a1.set_title(f"roofline: {Path(kv.get('scene', csv)).stem}, {d['rays'][0]} rays")
+    for key, label, colour, style in SHARES:
+        a2.plot(tus, 100 * d[key].astype(float), style, color=colour, label=label)
+    a2.set_ylabel("%")
+    a2.set_ylim(0, 105)
+    a2.set_title("utilisation and stalls")
+    for ax in (a1, a2):
+        if len(tus) > 1:
+            ax.set_xscale("log", base=2)
+        ax.set_xticks(tus)
+        ax.set_xticklabels([str(int(t)) for t in tus])
+        ax.set_xlabel("traversal units")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.text(0.01, 0.005, "\n".join(prov), fontsize=5.5, va="bottom")
+    fig.tight_layout(rect=(0, 0.03 + 0.02 * len(prov), 1, 1))
+    save_png(fig, out)
+    plt.close(fig)
+    print(f"[plot] {out}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 3:
+        raise SystemExit("error: usage: python -m dse.plot_roofline OUT.png CSV")
+    main(*sys.argv[1:])

@@ -1,0 +1,75 @@
+package rtaccel.cli
+
+import rtaccel.io.InputError
+import rtaccel.perf.Roofline
+
+/** make roofline: RTL runs (Simulate, each checked against the model) of one configuration or of a TUS list,
+  * each set against its memory and compute bounds (rtaccel.perf.Roofline, docs/roofline.md). Writes
+  * OUT/roofline.csv (plotted by dse.plot_roofline) and prints, last, one JSON line: the roofline of the last
+  * configuration (rays_per_s, memory_bound, compute_bound, roofline_fraction, binding, ...) and "points", all of them.
+  */
+object RooflineCmd {
+  val columns: Seq[String] = Seq("tus", "rays", "cycles", "rays_per_s", "memory_bound", "compute_bound", "compute_bound_box",
+    "compute_bound_tri", "roofline_fraction", "binding", "nearest_roof", "dram_bytes_per_ray", "box_jobs_per_ray", "tri_jobs_per_ray",
+    "util_memory", "util_iu", "util_tu", "stall_iu_arbitration", "stall_memory_data", "stall_memory_request",
+    "node_cache_miss_rate", "prim_cache_miss_rate", "ius", "mem_channels", "sim_build", "wall_build_s", "sim_cycles_per_wall_s",
+    "sim_cycles_per_cpu_s", "sim_wall_s")
+
+  /** "8 16 32" or "8,16,32": the TU counts of a sweep (empty: the configuration's own TUS). */
+  def tusList(s: String): Seq[Int] = s.split("[ ,]+").filter(_.nonEmpty).map(t => t.toIntOption.filter(_ >= 1).getOrElse(
+    throw new InputError(s"ROOFLINE_TUS must be TU counts >= 1 separated by spaces or commas (got '$t')"))).toSeq
+
+  /** One CSV row / JSON point of a simulate result. */
+  def point(j: ujson.Value): ujson.Obj = {
+    val r = j("roofline").obj
+    def miss(c: String): ujson.Value = j(c).obj.get("miss_rate").getOrElse(ujson.Null)
+    ujson.Obj.from(Seq("tus" -> j("tus"), "rays" -> j("rays"), "cycles" -> j("cycles")) ++ r.toSeq ++
+      Seq("node_cache_miss_rate" -> miss("node_cache"), "prim_cache_miss_rate" -> miss("prim_cache"),
+        "sim_build" -> j("sim_build"), "wall_build_s" -> j("wall_build_s"), "sim_cycles_per_wall_s" -> j("sim_cycles_per_wall_s"),
+        "sim_cycles_per_cpu_s" -> j("sim_cycles_per_cpu_s"), "sim_wall_s" -> j("sim_wall_s")))
+  }
+
+  def cell(v: ujson.Value): String = v match {
+    case ujson.Null => ""
+    case ujson.Str(s) => s
+    case ujson.Num(d) if d == math.rint(d) && math.abs(d) < 1e15 => f"$d%.0f"
+    case ujson.Num(d) if d.isNaN || d.isInfinite => throw new IllegalArgumentException(s"a roofline figure is not finite: $d")
+    case ujson.Num(d) => BigDecimal(d).round(new java.math.MathContext(6)).bigDecimal.stripTrailingZeros.toPlainString // 6 digits
+    case other => ujson.write(other)
+  }
+
+  def main(args: Array[String]): Unit = Cli.run(args, Flags.roofline) { a =>
+    val out = a.path("out")
+    val (scene, rays, e) = Cli.inputs(a)
+    val base = Cli.params(a)
+    val label = a.get("scene-label", a.need("tris"))
+    val list = tusList(a.get("tus-list", "")) match { case Seq() => Seq(base.tus); case l => l }
+    val build = a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named)
+    val points = list.zipWithIndex.map { case (t, i) =>
+      val b = Cli.build(scene, base.copy(tus = t), a)
+      System.err.println(s"[roofline] $label: TUS=$t (${i + 1} of ${list.length}), ${rays.count} rays")
+      val o = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e, build = build))
+      // a failed point stops the sweep before any CSV exists, so nothing downstream plots it
+      if (!o.ok) { println(ujson.write(o.json)); throw new CheckFailed(o.failures.map(f => s"TUS=$t $f")) }
+      val pt = point(o.json)
+      System.err.println(f"[roofline] TUS=$t: ${pt("rays_per_s").num}%.4g rays/s, memory bound ${cell(pt("memory_bound"))}, " +
+        s"compute bound ${cell(pt("compute_bound"))}, ${cell(pt("roofline_fraction"))} of the nearer roof: ${pt("binding").str}")
+      pt
+    }
+    val p = base
+    val res = Roofline.resources(p)
+    val sb = new StringBuilder(s"# scene=$label triangles=${scene.triangles} rays=${rays.count} config=${p.name} M=${p.m} " +
+      s"MPPL=${p.mppl} clock_mhz=${p.clockMhz} mem_bytes_per_s=${p.memory.bytesPerSecond} sustained=${p.memory.sustainedEfficiency} " +
+      s"ius=${res.ius} mem_channels=${res.memChannels} node_cache=${SweepTus.desc(p.nodeCache)} prim_cache=${SweepTus.desc(p.primCache)} " +
+      s"binds_at=${Roofline.bindsAt} rtaccel=${Cli.version}\n")
+    sb ++= columns.mkString(",") + "\n"
+    for (pt <- points) sb ++= columns.map(c => cell(pt.value.getOrElse(c, ujson.Null))).mkString(",") + "\n"
+    val csv = out.resolve("roofline.csv")
+    Cli.writeText(csv, sb.toString)
+    val last = points.last
+    val j = ujson.Obj.from(last.value.toSeq ++ Seq("scene" -> ujson.Str(label), "config" -> ujson.Str(p.name),
+      "csv" -> ujson.Str(csv.toString), "png" -> ujson.Str(out.resolve("roofline.png").toString),
+      "points" -> ujson.Arr.from(points), "rtaccel" -> ujson.Str(Cli.version)))
+    println(ujson.write(j))
+  }
+}
