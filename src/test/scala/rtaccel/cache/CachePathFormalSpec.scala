@@ -1,0 +1,38 @@
+package rtaccel.cache
+
+import org.scalatest.flatspec.AnyFlatSpec
+import rtaccel.config.{CacheParams, CachePolicy}
+import rtaccel.formal.{EnvBounds, FormalChecks}
+
+/** Bounded proofs of the cache path's answer properties (CachePathFormal, docs/formal.md): 4 sets of 1 way
+  * (direct-mapped) and 4 sets of 2 ways (true LRU), with 16 distinct lines requested (4 per set, so hits, misses,
+  * conflicts and evictions all occur), every memory and consumer stall of up to `stall` cycles. make test checks
+  * `depth` cycles; make regress goes deeper and adds unbounded stalls and the starvation fault.
+  */
+class CachePathFormalSpec extends AnyFlatSpec with FormalChecks {
+  behavior of "CachePath (bounded proof)"
+  val stall = 1
+  val answerBound = CachePathFormalSpec.answerBound
+  val live = EnvBounds(Some(stall), Some(stall))
+  val depth = if (regress) 18 else 12
+  val configs = Seq("direct-mapped, 4 sets" -> CacheParams(4, 1, CachePolicy.Dm), "2-way LRU, 4 sets" -> CacheParams(8, 2, CachePolicy.Lru))
+
+  for ((name, c) <- configs) {
+    it should s"answer each request once, in order, with the memory's data, within $answerBound cycles: $name" in
+      prove(new CachePathFormal(c, live, answerBound), depth)
+    if (regress) it should s"answer once, in order, with the memory's data under unbounded stalls: $name" in
+      prove(new CachePathFormal(c, EnvBounds(None, None), answerBound), depth)
+  }
+
+  val dm = configs.head._2
+  for (bug <- Seq(PathBug.Spurious, PathBug.Corrupt, PathBug.NoLast))
+    it should s"find a counterexample to a ${bug.name}" in { assert(refute(new CachePathFormal(dm, live, answerBound, bug), depth) <= depth) }
+  if (regress) it should s"find a counterexample to a ${PathBug.Starve.name} (not answered within $answerBound cycles)" in {
+    assert(refute(new CachePathFormal(dm, live, answerBound, PathBug.Starve), answerBound + 12) > answerBound)
+  }
+}
+
+object CachePathFormalSpec {
+  /** cycles from acceptance to the last beat of the answer the proofs promise (stalls of at most one cycle) */
+  val answerBound = 16
+}
