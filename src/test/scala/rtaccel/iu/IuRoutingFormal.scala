@@ -70,7 +70,7 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
   private def count(r: UInt): UInt = r(f.primIndexBits + f.countBits - 1, f.primIndexBits) +& 1.U
   private def first(r: UInt): UInt = r(f.primIndexBits - 1, 0)
   private def nodeAddr(r: UInt): UInt = (r(f.nodeIdBits - 1, 0) << log2Ceil(p.nodeStrideBytes)).pad(addrBits)
-  private def slotAddr(r: UInt, k: UInt): UInt = (primBase.U + ((first(r) +& k) << log2Ceil(p.primStrideBytes)))(addrBits - 1, 0)
+  private def slotAddr(r: UInt, k: UInt): UInt = (primBase.U(addrBits.W) + ((first(r) +& k) << log2Ceil(p.primStrideBytes)).pad(addrBits))(addrBits - 1, 0)
   private val nodeBeats = p.nodeStrideBytes * 8 / beatBits
   private val primBeats = p.primStrideBytes * 8 / beatBits
   val mem = new AbstractMem(addrBits, beatsBits, beatBits, depth = 2, bounds)

@@ -23,5 +23,5 @@ class IuRoutingFormalSpec extends AnyFlatSpec with FormalChecks {
 
 object IuRoutingFormalSpec {
   val answerBound = 24
-  val depth = 18
+  val depth = 16
 }
