@@ -16,8 +16,8 @@ object IuBug {
   case object Retag extends IuBug("wrong TU tag")
   /** bit 0 of a box result's first child reference flipped: not the node's data */
   case object Corrupt extends IuBug("corrupted child ref")
-  /** `last` dropped from a triangle result: the leaf is answered with too many results */
-  case object NoLast extends IuBug("lost last")
+  /** a box result given again in the next cycle: a request answered twice */
+  case object Duplicate extends IuBug("repeated box result")
   /** after the first box result, box results are suppressed: a node request never answered */
   case object Starve extends IuBug("starved box results")
 }
@@ -93,7 +93,9 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     case IuBug.Spurious => when(io.bugFire) { tri.valid := true.B }
     case IuBug.Retag => when(io.bugFire) { box.bits.tu := ~dut.io.box.bits.tu }
     case IuBug.Corrupt => when(io.bugFire) { box.bits.cref(0) := dut.io.box.bits.cref(0) ^ 1.U }
-    case IuBug.NoLast => when(io.bugFire) { tri.bits.last := false.B }
+    case IuBug.Duplicate =>
+      val again = RegNext(dut.io.box.valid, false.B); val bits = RegNext(dut.io.box.bits)
+      when(io.bugFire && again) { box.valid := true.B; box.bits := bits }
     case IuBug.Starve => when(boxSeen) { box.valid := false.B }
   }
 
