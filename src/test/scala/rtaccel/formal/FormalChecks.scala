@@ -27,11 +27,20 @@ trait FormalChecks extends ChiselScalatestTester with Formal { this: AnyFlatSpec
     info(f"bound $depth cycles: proved in $s%.1f s")
   }
 
-  /** The checker finds a counterexample within `depth` cycles (a deliberately broken harness); returns its length. */
-  def refute[T <: Module](gen: => T, depth: Int): Int = {
+  /** The checker finds a counterexample within `depth` cycles (a deliberately broken harness). After z3 answers
+    * sat, chiseltest 6 reads the trace back; z3 4.8 gives a memory's contents as a lambda, which chiseltest's
+    * response parser does not implement (NotImplementedError in SMTModelChecker.getWitness): the counterexample was
+    * found, only its VCD is not written.
+    */
+  def refute[T <: Module](gen: => T, depth: Int): Unit = {
     val t0 = System.nanoTime()
-    val e = intercept[FailedBoundedCheckException](run(gen, depth))
-    info(f"counterexample at cycle ${e.failAt} found in ${(System.nanoTime() - t0) / 1e9}%.1f s")
-    e.failAt
+    val e = intercept[Throwable](run(gen, depth))
+    val s = (System.nanoTime() - t0) / 1e9
+    e match {
+      case f: FailedBoundedCheckException => info(f"counterexample at cycle ${f.failAt} found in $s%.1f s")
+      case n: NotImplementedError if n.getStackTrace.exists(f => f.getClassName.endsWith("SMTModelChecker") && f.getMethodName == "getWitness") =>
+        info(f"counterexample found in $s%.1f s (not written as VCD: ${n.getMessage})")
+      case other => throw other
+    }
   }
 }
