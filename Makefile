@@ -31,7 +31,7 @@ TRIS       = $$(tools/tris $(SCENE))
 
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
-.PHONY: help deps venv verilator run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
+.PHONY: help deps venv verilator z3 run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
         yosys verilog area area-fp cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity
 
 help:
@@ -55,6 +55,11 @@ verilator:
 yosys:
 	@command -v yosys >/dev/null || { echo "[deps] installing yosys from apt"; \
 	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq yosys >/dev/null; }
+
+# z3 runs the bounded proofs of src/test/scala/**/*FormalSpec.scala (docs/formal.md) in make test and make regress.
+z3:
+	@command -v z3 >/dev/null || { echo "[deps] installing z3 from apt"; \
+	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq z3 >/dev/null; }
 
 # Compiles the Scala side and records its runtime classpath so entry points start as plain `java`.
 $(CP_FILE): $(SCALA_SRC)
@@ -234,8 +239,8 @@ soak: deps build/scenes/cornell.obj
 	  [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=build/scenes/cornell.obj OUT=$$G WIDTH=1000 HEIGHT=$$H DEPTH=0 >/dev/null || exit $$?; \
 	  $(MAKE) --no-print-directory simulate SCENE=build/scenes/cornell.obj GOLDEN=$$G CONFIG=$(RUN_CONFIG) \
 	    MEM_JITTER=$(or $(MEM_JITTER),23) HOST_STALL=$(or $(HOST_STALL),20) OUT=build/soak/simulate
-regress: deps
-	RTACCEL_REGRESS=full $(SBT) "testOnly rtaccel.top.PlatformSpec rtaccel.iu.IuPipesSpec rtaccel.fp.FpDirectedSpec"
+regress: deps z3
+	RTACCEL_REGRESS=full $(SBT) "testOnly rtaccel.top.PlatformSpec rtaccel.iu.IuPipesSpec rtaccel.fp.FpDirectedSpec rtaccel.cache.CachePathFormalSpec rtaccel.iu.IuRoutingFormalSpec"
 
 # Paper Figs 12-13 without cache: rays/s and memory utilisation vs TUs (CSV + PNG in build/paper-nocache).
 NOCACHE_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
@@ -317,7 +322,7 @@ $(FIXTURES): $(wildcard scenes/*.py golden/*.py) | venv
 	  $(PY) -m golden.export --scene $$d/scene.obj --out $$d/golden --width 32 --height 24 --depth 3 --seed 7 >/dev/null; done
 	touch $@
 
-test: deps yosys fixtures
+test: deps yosys z3 fixtures
 	@rm -rf build/test-reports; mkdir -p build/test-reports/python
 	@rc=0; \
 	RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=1; \

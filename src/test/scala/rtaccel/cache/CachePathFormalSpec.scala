@@ -1,0 +1,39 @@
+package rtaccel.cache
+
+import org.scalatest.flatspec.AnyFlatSpec
+import rtaccel.config.{CacheParams, CachePolicy}
+import rtaccel.formal.{EnvBounds, FormalChecks}
+
+/** Bounded proofs of the cache path's answer properties (CachePathFormal, docs/formal.md): 4 sets of 1 way
+  * (direct-mapped) and 4 sets of 2 ways (true LRU), with 16 distinct lines requested (4 per set, so hits, misses,
+  * conflicts and evictions all occur), every memory and consumer stall of up to `stall` cycles. make test checks
+  * `depth` cycles; make regress goes deeper and adds unbounded stalls.
+  */
+class CachePathFormalSpec extends AnyFlatSpec with FormalChecks {
+  behavior of "CachePath (bounded proof)"
+  val stall = 1
+  val answerBound = CachePathFormalSpec.answerBound
+  val live = EnvBounds(Some(stall), Some(stall))
+  // (name, cache, depth in make test (0: make regress only), depth in make regress): z3's time grows steeply with
+  // the depth, and the 2-way LRU did not finish depth 6 in 2 minutes (docs/formal.md)
+  val configs = Seq(("direct-mapped, 4 sets", CacheParams(4, 1, CachePolicy.Dm), 12, 14),
+    ("2-way LRU, 4 sets", CacheParams(8, 2, CachePolicy.Lru), 0, 6))
+
+  for ((name, c, quick, deep) <- configs if regress || quick > 0) {
+    val depth = if (regress) deep else quick
+    it should s"answer each request once, in order, with the memory's data, within $answerBound cycles: $name" in
+      prove(new CachePathFormal(c, live, answerBound), depth)
+    if (regress) it should s"answer once, in order, with the memory's data under unbounded stalls: $name" in
+      prove(new CachePathFormal(c, EnvBounds(None, None), answerBound), depth)
+  }
+
+  val dm = configs.head._2
+  val depth = configs.head._3
+  for (bug <- Seq(PathBug.Spurious, PathBug.Corrupt, PathBug.NoLast))
+    it should s"find a counterexample to a ${bug.name}" in refute(new CachePathFormal(dm, live, answerBound, bug), depth)
+}
+
+object CachePathFormalSpec {
+  /** cycles from acceptance to the last beat of the answer the proofs promise (stalls of at most one cycle) */
+  val answerBound = 16
+}
