@@ -42,9 +42,12 @@ def _one_of(names):
 
 
 def _box_format(v):
-    # rtaccel.fp.FpFormat.parse and PlatformParams' rule: at most fp32's 8 exponent and 23 fraction bits
+    # rtaccel.fp.FpFormat.parse and PlatformParams' rule: at most fp32's 8 exponent and 23 fraction bits;
+    # m<M> = M fraction bits with the exponent fitted to the scene (config.BoxRange)
     m = re.fullmatch(r"e(\d+)m(\d+)", v) if isinstance(v, str) else None
-    return v in ("fp32", "fp24", "bf16", "fp16") or (m is not None and 3 <= int(m[1]) <= 8 and 2 <= int(m[2]) <= 23)
+    f = re.fullmatch(r"m(\d+)", v) if isinstance(v, str) else None
+    return (v in ("fp32", "fp24", "bf16", "fp16") or (m is not None and 3 <= int(m[1]) <= 8 and 2 <= int(m[2]) <= 23)
+            or (f is not None and 2 <= int(f[1]) <= 23))
 
 
 def _cache(v):
@@ -58,7 +61,7 @@ KNOBS = {
     "MPPL": Knob("--mppl", "an integer 1..16", _int(1, 16)),
     "STACK": Knob("--stack-depth", "an integer 1..4096", _int(1, 4096)),
     "SHORT_STACK": Knob("--short-stack", "an integer 1..64", _int(1, 64)),
-    "BOX_FORMAT": Knob("--box-format", "fp32, fp24, bf16, fp16 or e<E>m<M> with E <= 8, M <= 23", _box_format),
+    "BOX_FORMAT": Knob("--box-format", "fp32, fp24, bf16, fp16, e<E>m<M> with E <= 8, M <= 23, or m<M> (exponent fitted to the scene)", _box_format),
     "TRI_TEST": Knob("--tri-test", "mt or watertight", _one_of(("mt", "watertight"))),
     "NODE_FORMAT": Knob("--node-format", "full or q2..q16 (quantized planes, model only)",
                         lambda v: isinstance(v, str) and re.fullmatch(r"full|q([2-9]|1[0-6])", v) is not None),

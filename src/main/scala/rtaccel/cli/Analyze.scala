@@ -19,12 +19,12 @@ object Analyze {
     val results = mppls.map { k =>
       val p = base.copy(mppl = k)
       System.err.println(s"[analyze] MPPL=$k: building and tracing ${rays.count} rays")
-      val b = Cli.build(scene, p, a) // CONFIG=<preset> is checked against the scene, CONFIG=fit fitted
+      val b = Cli.build(scene, rays, p, a) // CONFIG=<preset> is checked against the scene, CONFIG=fit fitted
       val c = Analysis.run(b.scene, b.bvh, b.params, rays)
       (k, b.bvh, c, Analysis.mpplRow(b.params, rays, b.bvh, c))
     }
     val (_, lbvh, lc, _) = results.find(_._1 == levelMppl).getOrElse {
-      val b = Cli.build(scene, base, a); (levelMppl, b.bvh, Analysis.run(b.scene, b.bvh, b.params, rays), null)
+      val b = Cli.build(scene, rays, base, a); (levelMppl, b.bvh, Analysis.run(b.scene, b.bvh, b.params, rays), null)
     }
     // what CONFIG made of the scene (the preset, or fit), as the builds above named it: no extra BVH build
     val cfgName = if (Cli.fitRequested(a)) rtaccel.config.Fit.fitTo(base, lbvh).name else base.name

@@ -20,7 +20,7 @@ object Bench {
     val builds = (0 until repeat).map { _ =>
       val t0 = System.nanoTime(); val bvh = Mbvh.build(scene, p); ((System.nanoTime() - t0) / 1e9, bvh)
     }
-    val b = Cli.build(scene, p, a) // the configuration CONFIG names, fitted or checked
+    val b = Cli.build(scene, rays, p, a) // the configuration CONFIG names, fitted or checked
     val tr = new Traversal(MemoryImage.pack(b.bvh, b.scene, b.params))
     tr.traceAll(rays) // JIT warm-up, not timed
     val cpu = java.lang.management.ManagementFactory.getThreadMXBean

@@ -22,7 +22,7 @@ object CacheSim {
     val tLoad = System.nanoTime()
     val (scene, rays, _) = Cli.inputs(a)
     val loadS = (System.nanoTime() - tLoad) / 1e9 // ~0 when Serve kept the scene and rays
-    val b = Cli.build(scene, p0, a)
+    val b = Cli.build(scene, rays, p0, a)
     val p = b.params
     val (node, prim) = (p.nodeCache, p.primCache)
     CacheSink(p) // validate geometry before the traversal runs

@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import java.nio.file.{Path, Paths}
-import rtaccel.config.{CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Presets, TriTest}
+import rtaccel.config.{BoxRange, CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Presets, TriTest}
 import rtaccel.bvh.Mbvh
 import rtaccel.io.{InputError, Npy}
 import rtaccel.scene.{Normalize, Rays, Scene}
@@ -49,7 +49,9 @@ object Cli {
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),
-      boxFormat = a.opt("box-format").map(rtaccel.fp.FpFormat.parse).getOrElse(base.boxFormat),
+      // m<M>: M fraction bits, the exponent fitted to the scene in build()
+      boxFormat = a.opt("box-format").map(v => BoxRange.fitRequest(v).fold(rtaccel.fp.FpFormat.parse(v))(rtaccel.fp.FpFormat(8, _)))
+        .getOrElse(base.boxFormat),
       triTest = a.opt("tri-test").map(TriTest.parse).getOrElse(base.triTest),
       nodeQuantBits = a.opt("node-format").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
       primPacked = a.opt("prim-format").map(Numerics.parsePrimFormat).getOrElse(base.primPacked),
@@ -93,8 +95,14 @@ object Cli {
     Built(scene, p, bvh, secs)
   }
 
-  /** build() with CONFIG and STACK as the command line gives them. */
-  def build(scene: Scene, p0: PlatformParams, a: Args): Built = build(scene, p0, fitRequested(a), stackArg(a))
+  /** build() with CONFIG, STACK and BOX_FORMAT as the command line gives them; the box format is fitted
+    * (BOX_FORMAT=m<M>) or checked against the depth of the scene along these rays (config.BoxRange).
+    */
+  def build(scene: Scene, rays: Rays, p0: PlatformParams, a: Args): Built = {
+    val b = build(scene, p0, fitRequested(a), stackArg(a))
+    val depth = Memo("box-depth", (new Memo.Id(scene), new Memo.Id(rays)))(BoxRange.depth(scene, rays))
+    b.copy(params = BoxRange.fit(b.params, a.opt("box-format"), depth, scene.name))
+  }
 
   def fitRequested(a: Args): Boolean = a.get("config", "fit") == "fit"
   def stackArg(a: Args): Option[Int] = a.opt("stack-depth").map(_ => a.int("stack-depth", 0))

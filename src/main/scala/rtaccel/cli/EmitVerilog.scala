@@ -17,6 +17,8 @@ object EmitVerilog {
   def preset(a: Args, what: String): rtaccel.config.PlatformParams = {
     val cfg = a.need("config")
     if (cfg == "fit") throw new rtaccel.io.InputError(s"$what needs a preset (CONFIG=paper2017|paper2017-lrp|small); fitted configs come from a scene via make simulate")
+    a.opt("box-format").flatMap(rtaccel.config.BoxRange.fitRequest).foreach(m => throw new rtaccel.io.InputError(
+      s"BOX_FORMAT=m$m fits the exponent to a scene's rays, which $what does not read; give the format as e<E>m$m (make trace prints the fitted one under numerics)"))
     val p = Cli.params(a).copy(name = cfg)
     rtaccel.cache.hw.CachePath.validate(p)
     p

@@ -46,7 +46,7 @@ object RooflineCmd {
     val list = tusList(a.get("tus-list", "")) match { case Seq() => Seq(base.tus); case l => l }
     val build = a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named)
     val points = list.zipWithIndex.map { case (t, i) =>
-      val b = Cli.build(scene, base.copy(tus = t), a)
+      val b = Cli.build(scene, rays, base.copy(tus = t), a)
       System.err.println(s"[roofline] $label: TUS=$t (${i + 1} of ${list.length}), ${rays.count} rays")
       val o = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e, build = build))
       // a failed point stops the sweep before any CSV exists, so nothing downstream plots it

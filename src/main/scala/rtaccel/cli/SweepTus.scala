@@ -25,7 +25,7 @@ object SweepTus {
     val base = Cli.params(a)
     val label = a.get("scene-label", a.need("tris"))
     val rows = tusList.map { t =>
-      val b = Cli.build(scene, base.copy(tus = t), a)
+      val b = Cli.build(scene, rays, base.copy(tus = t), a)
       System.err.println(s"[sweep] $label: TUs=$t")
       val o = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e))
       // a failed point stops the sweep before any CSV exists, so nothing downstream plots it

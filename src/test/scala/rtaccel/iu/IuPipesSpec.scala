@@ -44,6 +44,7 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   // TRI_TEST=watertight adds the exit-distance slack (PlatformParams.boxSlackUlps) to the same pipe
   private val regress = sys.env.get("RTACCEL_REGRESS").contains("full")
   private val boxFormats = Seq((FpFormat.fp32, TriTest.Mt, 20000), (FpFormat.parse("bf16"), TriTest.Mt, 3000),
+    (FpFormat(4, 7), TriTest.Mt, 1500), // what BOX_FORMAT=m7 fits to a unit-scale scene: a 4-bit exponent that overflows
     (FpFormat.fp32, TriTest.Watertight, 5000)) ++
     (if (regress) Seq((FpFormat.parse("fp16"), TriTest.Mt, 6000), (FpFormat.parse("fp24"), TriTest.Mt, 6000),
       (FpFormat.parse("bf16"), TriTest.Watertight, 6000)) else Nil)
