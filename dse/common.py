@@ -44,6 +44,26 @@ def save_png(fig, path, dpi=120):
         fig.savefig(tmp, dpi=dpi, format="png")
 
 
+def tus_axes(axes, tus=None):
+    """The traversal-unit x axis the TU sweeps share: log2 scale, labelled ticks at the swept counts."""
+    for ax in axes:
+        if tus is None or len(tus) > 1:
+            ax.set_xscale("log", base=2)
+        if tus is not None:
+            ax.set_xticks(tus)
+            ax.set_xticklabels([str(int(t)) for t in tus])
+        ax.set_xlabel("traversal units")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+
+
+def save_with_footer(fig, path, footer, fontsize=6):
+    """Saves `fig` with its provenance lines (which scene, config and version made it) along the bottom."""
+    fig.text(0.01, 0.005, "\n".join(footer), fontsize=fontsize, va="bottom")
+    fig.tight_layout(rect=(0, 0.02 + 0.02 * len(footer), 1, 1))
+    save_png(fig, path)
+
+
 def _tokens(fields):
     if isinstance(fields, str):
         return fields.split()

@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from dse.common import parse_provenance, save_png  # noqa: E402
+from dse.common import parse_provenance, save_with_footer, tus_axes  # noqa: E402
 
 BOUNDS = (("memory_bound", "memory bound", "C3", "-"), ("compute_bound", "compute bound (IU)", "C2", "-"),
           ("compute_bound_box", "IU, boxes alone", "C2", ":"), ("compute_bound_tri", "IU, triangles alone", "C2", "--"))
@@ -52,17 +52,8 @@ def main(out, csv):
     a2.set_ylabel("%")
     a2.set_ylim(0, 105)
     a2.set_title("utilisation and stalls")
-    for ax in (a1, a2):
-        if len(tus) > 1:
-            ax.set_xscale("log", base=2)
-        ax.set_xticks(tus)
-        ax.set_xticklabels([str(int(t)) for t in tus])
-        ax.set_xlabel("traversal units")
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.text(0.01, 0.005, "\n".join(prov), fontsize=5.5, va="bottom")
-    fig.tight_layout(rect=(0, 0.03 + 0.02 * len(prov), 1, 1))
-    save_png(fig, out)
+    tus_axes((a1, a2), tus)
+    save_with_footer(fig, out, prov, fontsize=5.5)
     plt.close(fig)
     print(f"[plot] {out}", file=sys.stderr)
 

@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from dse.common import parse_provenance, save_png  # noqa: E402
+from dse.common import parse_provenance, save_with_footer, tus_axes  # noqa: E402
 
 
 def read(path):
@@ -37,15 +37,10 @@ def main(out, *csvs):
         a2.plot(d["tus"], 100 * d["mem_utilisation"], style, color=colour, label=label)
         footer += prov
     for ax, title, yl in ((a1, "rays/s at 150 MHz", "rays/s"), (a2, "memory utilisation (of peak)", "%")):
-        ax.set_xscale("log", base=2)
-        ax.set_xlabel("traversal units")
         ax.set_ylabel(yl)
         ax.set_title(title)
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.text(0.01, 0.005, "\n".join(footer), fontsize=6, va="bottom")
-    fig.tight_layout(rect=(0, 0.02 + 0.02 * len(footer), 1, 1))
-    save_png(fig, out)
+    tus_axes((a1, a2))
+    save_with_footer(fig, out, footer)
     plt.close(fig)
     print(f"[plot] {out}")
 
