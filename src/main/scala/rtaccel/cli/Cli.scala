@@ -101,7 +101,8 @@ object Cli {
   def build(scene: Scene, rays: Rays, p0: PlatformParams, a: Args): Built = {
     val b = build(scene, p0, fitRequested(a), stackArg(a))
     val depth = Memo("box-depth", (new Memo.Id(scene), new Memo.Id(rays)))(BoxRange.depth(scene, rays))
-    b.copy(params = BoxRange.fit(b.params, a.opt("box-format"), depth, scene.name))
+    def measure(m: Int, d: Double) = rtaccel.model.FormatFit.boxExponent(rtaccel.bvh.MemoryImage.pack(b.bvh, b.scene, b.params), rays, m, d)
+    b.copy(params = BoxRange.fit(b.params, a.opt("box-format"), depth, scene.name, measure))
   }
 
   def fitRequested(a: Args): Boolean = a.get("config", "fit") == "fit"

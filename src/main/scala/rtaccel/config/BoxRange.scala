@@ -14,9 +14,13 @@ import rtaccel.scene.{Rays, Scene}
   * with headroom 2, and its smallest normal must be at most one ulp of that depth (depth x 2^-M), so that the
   * distances near the depth are not all subnormal.
   *
-  * BOX_FORMAT=m<M> asks for M fraction bits and the fewest exponent bits (3..8) that represent the scene.
+  * BOX_FORMAT=m<M> asks for M fraction bits and the fewest exponent bits (3..8) that represent the scene and
+  * cost at most workTolerance more node fetches than 8 exponent bits (model.FormatFit measures it).
   */
 object BoxRange {
+  /** The extra traversal work (node fetches) a fitted exponent may cost against fp32's 8 bits. */
+  val workTolerance: Double = 0.01
+
   private val FitRequest = """m(\d+)""".r
 
   /** The fraction bits of a BOX_FORMAT=m<M> request, None for a named or e<E>m<M> format. */
@@ -61,14 +65,17 @@ object BoxRange {
     far
   }
 
-  /** `p` with its box format fitted (BOX_FORMAT=m<M>) or checked against the scene's depth. */
-  def fit(p: PlatformParams, request: Option[String], depth: Double, sceneName: String): PlatformParams =
+  /** `p` with its box format fitted (BOX_FORMAT=m<M>: `measure` picks among the widths that represent the
+    * scene, narrowest first) or checked against the scene's depth.
+    */
+  def fit(p: PlatformParams, request: Option[String], depth: Double, sceneName: String,
+          measure: (Int, Double) => FpFormat = (m, d) => (3 to 8).map(FpFormat(_, m)).find(represents(_, d)).get): PlatformParams =
     request.flatMap(fitRequest) match {
       case Some(m) =>
-        val f = (3 to 8).map(FpFormat(_, m)).find(represents(_, depth)).getOrElse(throw new InputError(
+        if (!represents(FpFormat(8, m), depth)) throw new InputError(
           f"BOX_FORMAT=m$m: no exponent width of 3..8 bits represents scene '$sceneName' (its rays reach t = $depth%.3g); " +
-            "use BOX_FORMAT=fp32 or scale the rays' directions"))
-        p.copy(boxFormat = f)
+            "use BOX_FORMAT=fp32 or scale the rays' directions")
+        p.copy(boxFormat = measure(m, depth))
       case None =>
         val f = p.boxFormat // fp32 is the paper's test and the reference of the others: never refused
         if (f != FpFormat.fp32 && !represents(f, depth)) throw new InputError(
