@@ -53,7 +53,8 @@ object Cli {
       boxFormat = a.opt("box-format").map(v => BoxRange.fitRequest(v).fold(rtaccel.fp.FpFormat.parse(v))(rtaccel.fp.FpFormat(8, _)))
         .getOrElse(base.boxFormat),
       triTest = a.opt("tri-test").map(TriTest.parse).getOrElse(base.triTest),
-      nodeQuantBits = a.opt("node-format").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
+      // fit: the narrowest quantization the scene needs, chosen in build()
+      nodeQuantBits = a.opt("node-format").filter(_ != "fit").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
       primPacked = a.opt("prim-format").map(Numerics.parsePrimFormat).getOrElse(base.primPacked),
       nodeCache = cacheArg(a, "node", base.nodeCache), primCache = cacheArg(a, "prim", base.primCache))
   }
@@ -95,14 +96,16 @@ object Cli {
     Built(scene, p, bvh, secs)
   }
 
-  /** build() with CONFIG, STACK and BOX_FORMAT as the command line gives them; the box format is fitted
-    * (BOX_FORMAT=m<M>) or checked against the depth of the scene along these rays (config.BoxRange).
+  /** build() with CONFIG, STACK, BOX_FORMAT and NODE_FORMAT as the command line gives them; the box format is
+    * fitted (BOX_FORMAT=m<M>) or checked against the depth of the scene along these rays (config.BoxRange), and
+    * NODE_FORMAT=fit picks the narrowest quantization (model.FormatFit).
     */
   def build(scene: Scene, rays: Rays, p0: PlatformParams, a: Args): Built = {
     val b = build(scene, p0, fitRequested(a), stackArg(a))
     val depth = Memo("box-depth", (new Memo.Id(scene), new Memo.Id(rays)))(BoxRange.depth(scene, rays))
     def measure(m: Int, d: Double) = rtaccel.model.FormatFit.boxExponent(rtaccel.bvh.MemoryImage.pack(b.bvh, b.scene, b.params), rays, m, d)
-    b.copy(params = BoxRange.fit(b.params, a.opt("box-format"), depth, scene.name, measure))
+    val boxed = BoxRange.fit(b.params, a.opt("box-format"), depth, scene.name, measure)
+    b.copy(params = if (a.opt("node-format").contains("fit")) rtaccel.model.FormatFit.nodeFormat(b.bvh, b.scene, boxed, rays) else boxed)
   }
 
   def fitRequested(a: Args): Boolean = a.get("config", "fit") == "fit"

@@ -19,6 +19,8 @@ object EmitVerilog {
     if (cfg == "fit") throw new rtaccel.io.InputError(s"$what needs a preset (CONFIG=paper2017|paper2017-lrp|small); fitted configs come from a scene via make simulate")
     a.opt("box-format").flatMap(rtaccel.config.BoxRange.fitRequest).foreach(m => throw new rtaccel.io.InputError(
       s"BOX_FORMAT=m$m fits the exponent to a scene's rays, which $what does not read; give the format as e<E>m$m (make trace prints the fitted one under numerics)"))
+    if (a.opt("node-format").contains("fit")) throw new rtaccel.io.InputError(
+      s"NODE_FORMAT=fit picks the quantization from a scene's rays, which $what does not read; give it as q<bits> or full (make trace prints the fitted one under numerics)")
     val p = Cli.params(a).copy(name = cfg)
     rtaccel.cache.hw.CachePath.validate(p)
     p

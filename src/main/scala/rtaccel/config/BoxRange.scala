@@ -18,7 +18,9 @@ import rtaccel.scene.{Rays, Scene}
   * cost at most workTolerance more node fetches than 8 exponent bits (model.FormatFit measures it).
   */
 object BoxRange {
-  /** The extra traversal work (node fetches) a fitted exponent may cost against fp32's 8 bits. */
+  /** The extra traversal work (node fetches) a fitted format may cost: a fitted box exponent against fp32's 8 bits,
+    * a fitted node quantization (NODE_FORMAT=fit) in node bytes against the fewest any node format reaches.
+    */
   val workTolerance: Double = 0.01
 
   private val FitRequest = """m(\d+)""".r

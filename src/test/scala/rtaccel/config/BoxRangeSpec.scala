@@ -1,10 +1,7 @@
 package rtaccel.config
 
 import org.scalatest.funsuite.AnyFunSuite
-import rtaccel.TestScenes
-import rtaccel.bvh.{Mbvh, MemoryImage}
 import rtaccel.fp.FpFormat
-import rtaccel.model.{AccessSink, FormatFit, RayStats, Traversal}
 import rtaccel.io.InputError
 import rtaccel.scene.{Rays, Scene}
 
@@ -50,20 +47,5 @@ class BoxRangeSpec extends AnyFunSuite {
     assert(BoxRange.fit(p, None, 1e-40, "tiny") == p)
     val bf = p.copy(boxFormat = FpFormat.parse("bf16"))
     assert(BoxRange.fit(bf, Some("bf16"), 1e30, "s") == bf)
-  }
-
-  test("FormatFit: the narrowest exponent whose node fetches stay within the tolerance of 8 bits, on a scene") {
-    val scene = TestScenes.soup(3, 400, 0.3f); val rays = TestScenes.rays(5, 1500, -1f, 11f)
-    val p = PlatformParams(m = 4, mppl = 4)
-    val img = MemoryImage.pack(Mbvh.build(scene, p), scene, p)
-    def fetches(f: FpFormat) = { val st = new RayStats; new Traversal(img.copy(p = p.copy(boxFormat = f))).traceAll(rays, AccessSink.none, st); st.nodeFetches }
-    val depth = BoxRange.depth(scene, rays)
-    for (m <- Seq(3, 7)) {
-      val f = FormatFit.boxExponent(img, rays, m, depth)
-      val full = fetches(FpFormat(8, m)); val tol = full * (1 + BoxRange.workTolerance)
-      info(s"m$m -> ${f.name}: ${fetches(f)} node fetches against $full with 8 exponent bits")
-      assert(f.manBits == m && BoxRange.represents(f, depth) && fetches(f) <= tol)
-      if (f.expBits > 3 && BoxRange.represents(FpFormat(f.expBits - 1, m), depth)) assert(fetches(FpFormat(f.expBits - 1, m)) > tol)
-    }
   }
 }
