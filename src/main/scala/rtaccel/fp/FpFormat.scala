@@ -19,6 +19,8 @@ final case class FpFormat(expBits: Int = 8, manBits: Int = 23) {
 
 object FpFormat {
   val fp32: FpFormat = FpFormat(8, 23)
+  /** binary64: holds the product of two fp32 values exactly (the watertight test's zero fallback); not a box format. */
+  val fp64: FpFormat = FpFormat(11, 52)
   val named: Seq[(String, FpFormat)] = Seq("fp32" -> fp32, "fp24" -> FpFormat(8, 15), "bf16" -> FpFormat(8, 7), "fp16" -> FpFormat(5, 10))
   private val Em = """e(\d+)m(\d+)""".r
   /** fp32 | fp24 | bf16 | fp16 | e<E>m<M>; IllegalArgumentException with the accepted names otherwise. */

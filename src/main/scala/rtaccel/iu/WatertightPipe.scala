@@ -22,7 +22,7 @@ class WatertightPipe(p: PlatformParams) extends Module {
     val out = Valid(new TriResult(p))
   })
   private val f = FpFormat.fp32
-  private val wide = FpFormat(11, 52) // binary64: holds the product of two binary32 values exactly
+  private val wide = FpFormat.fp64 // the model's Double: the product of two binary32 values is exact there
   private val one = "h3f800000".U(32.W)
   private val zero = 0.U(32.W)
   private def sub(a: UInt, b: UInt) = Fp.sub(f, a, b)

@@ -45,7 +45,7 @@ class FpDirectedSpec extends AnyFunSuite with ChiselScalatestTester {
       }
       val x = java.lang.Double.longBitsToDouble(rnd.nextLong())
       if (!x.isNaN) for (up <- Seq(false, true))
-        assert(sameBits(sf32.convertFrom(new SoftFloat(FpFormat(11, 52)), java.lang.Double.doubleToRawLongBits(x), if (up) Up else Down),
+        assert(sameBits(sf32.convertFrom(new SoftFloat(FpFormat.fp64), java.lang.Double.doubleToRawLongBits(x), if (up) Up else Down),
           javaDirected(x, up)), s"convert $x up=$up")
     }
   }

@@ -6,7 +6,7 @@ import org.scalatest.flatspec.AnyFlatSpec
 import org.scalatest.matchers.should.Matchers
 
 /** RTL against SoftFloat for other formats: exhaustive for 8-bit and 6-bit formats, edge pairs plus large
-  * random runs for half precision FpFormat(5, 10) and FpFormat(8, 15); fp64 FpFormat(11, 52) against Java
+  * random runs for half precision FpFormat(5, 10) and FpFormat(8, 15); fp64 (FpFormat.fp64) against Java
   * double. One Verilator build holds all formats.
   */
 class FpFormatsSpec extends AnyFlatSpec with ChiselScalatestTester with Matchers {
@@ -14,7 +14,7 @@ class FpFormatsSpec extends AnyFlatSpec with ChiselScalatestTester with Matchers
   private val f815 = FpFormat(8, 15)
   private val f43 = FpFormat(4, 3)
   private val f32s = FpFormat(3, 2)
-  private val fp64 = FpFormat(11, 52)
+  private val fp64 = FpFormat.fp64
   private val fmts = Seq((half, 4), (f815, 2), (f43, 4), (f32s, 2), (fp64, 1))
   private val n64 = 200000
   private val nHalf = 1000000

@@ -52,7 +52,7 @@ class SoftFloatSpec extends AnyFlatSpec with Matchers {
   }
 
   "SoftFloat(fp64)" should "equal Java double on every pair of edge values and 1,000,000 random pairs per op" in {
-    val f = FpFormat(11, 52)
+    val f = FpFormat.fp64
     val g = new FpTestGen(f, 3)
     val sf = new SoftFloat(f)
     val chk = new FpCheck("soft64")
