@@ -2,7 +2,7 @@ package rtaccel.iu
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.{Numerics, PlatformParams}
+import rtaccel.config.{Numerics, PlatformParams, TriTest}
 import rtaccel.mc.FetchBeat
 
 /** The job a leaf's primitives are tested for: which TU asked, its ray and its current tmax. */
@@ -49,16 +49,23 @@ class LeafAssembler(p: PlatformParams, beatBits: Int) extends Module {
   val errs = Reg(Vec(cap, Bool()))
   val ends = Reg(Vec(cap, Bool()))
   val n = RegInit(0.U(nBits.W))
-  val jobs = Module(new Queue(new LeafCtx(p), jobDepth))
+  // the queued job keeps what the triangle test reads: Möller–Trumbore takes no reciprocal direction
+  private val keepInv = p.triTest == TriTest.Watertight
+  class Stored extends Bundle {
+    val tu = UInt(p.tuBits.W); val tmax = UInt(32.W); val o = Vec(3, UInt(32.W)); val d = Vec(3, UInt(32.W))
+    val tmin = UInt(32.W); val inv = if (keepInv) Some(Vec(3, UInt(32.W))) else None
+  }
+  val jobs = Module(new Queue(new Stored, jobDepth))
 
   // ---- input side: the beat index within the current leaf and how many of its words are record words
   val in = io.in.bits
   val beatIdx = RegInit(0.U(log2Ceil(p.refs.maxLeafPrims * rec / bw + 2).W))
-  val leafWords = (in.lastPrim +& 1.U) * rec.U
-  val leafBeats = (leafWords + (bw - 1).U) >> log2Ceil(bw)
-  val finalBeat = beatIdx === leafBeats - 1.U
-  val tail = leafWords(log2Ceil(bw) - 1, 0) // record words in the final beat (0 = a whole beat)
-  val valid = Mux(finalBeat && tail =/= 0.U, tail, bw.U)
+  // by count: the leaf's beats - 1 and the record words of its final beat (the rest of that beat is padding)
+  private val counts = 1 to (1 << p.refs.countBits)
+  val lastBeat = VecInit(counts.map(c => ((rec * c + bw - 1) / bw - 1).U(beatIdx.getWidth.W)))(in.lastPrim)
+  val finalWords = VecInit(counts.map(c => (rec * c - ((rec * c + bw - 1) / bw - 1) * bw).U(log2Ceil(bw + 1).W)))(in.lastPrim)
+  val finalBeat = beatIdx === lastBeat
+  val valid = Mux(finalBeat, finalWords, bw.U)
 
   // ---- output side: a whole record at the front of the buffer
   val outFire = n >= rec.U
@@ -67,15 +74,17 @@ class LeafAssembler(p: PlatformParams, beatBits: Int) extends Module {
   io.in.ready := nAfter +& bw.U <= cap.U && (!firstBeat || jobs.io.enq.ready)
   val inFire = io.in.fire
   jobs.io.enq.valid := io.in.valid && firstBeat && nAfter +& bw.U <= cap.U
-  jobs.io.enq.bits := in.ctx
+  val st = jobs.io.enq.bits
+  st.tu := in.ctx.tu; st.tmax := in.ctx.tmax; st.o := in.ctx.ray.o; st.d := in.ctx.ray.d; st.tmin := in.ctx.ray.tmin
+  st.inv.foreach(_ := in.ctx.ray.inv)
   when(inFire) { beatIdx := Mux(finalBeat, 0.U, beatIdx + 1.U) }
   io.leafTaken := inFire && finalBeat
 
   val out = io.out.bits
   io.out.valid := outFire
-  out.tu := jobs.io.deq.bits.tu
-  out.ray := jobs.io.deq.bits.ray
-  out.tmax := jobs.io.deq.bits.tmax
+  val job = jobs.io.deq.bits
+  out.tu := job.tu; out.tmax := job.tmax; out.ray.o := job.o; out.ray.d := job.d; out.ray.tmin := job.tmin
+  out.ray.inv := job.inv.getOrElse(VecInit(Seq.fill(3)(0.U(32.W))))
   out.words := VecInit(words.take(rec))
   out.err := errs.take(rec).reduce(_ || _)
   out.last := ends(rec - 1)

@@ -2,7 +2,7 @@ package rtaccel.mc
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.{Numerics, PlatformParams}
+import rtaccel.config.PlatformParams
 
 /** Where a leaf lies and what it reads, by primitive format (docs/numerics.md, "Packed primitives"):
   *  - slot64: `count` 64 B slots from slot `first`, count x slot beats;
@@ -21,9 +21,10 @@ final case class LeafFetch(p: PlatformParams, beatBytes: Int) {
   /** Byte address of the leaf whose reference's first field is `first`. */
   def addr(primBase: UInt, first: UInt): UInt =
     if (packed) primBase +& first * p.leafRowBytes.U else primBase +& (first << log2Ceil(p.primStrideBytes))
-  /** Beats of a leaf of `count` (1-based) primitives. */
+  /** Beats of a leaf of `count` (1-based) primitives: a table by count with packed records (no rounding logic). */
   def beats(count: UInt): UInt =
-    if (packed) (count * Numerics.packedPrimBytes.U +& (beatBytes - 1).U) >> beatLog else count << log2Ceil(slotBeats)
+    if (packed) VecInit((0 to p.refs.maxLeafPrims).map(c => beatsOf(c).U(log2Ceil(maxBeats + 1).W)))(count)
+    else count << log2Ceil(slotBeats)
   /** DRAM bytes of that leaf. */
   def bytes(count: UInt): UInt = if (packed) beats(count) << beatLog else count << log2Ceil(p.primStrideBytes)
 }
