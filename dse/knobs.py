@@ -65,7 +65,7 @@ KNOBS = {
     "TRI_TEST": Knob("--tri-test", "mt or watertight", _one_of(("mt", "watertight"))),
     "NODE_FORMAT": Knob("--node-format", "full, q2..q16 (quantized planes) or fit",
                         lambda v: isinstance(v, str) and re.fullmatch(r"full|fit|q([2-9]|1[0-6])", v) is not None),
-    "PRIM_FORMAT": Knob("--prim-format", "slot64 or packed (model only)", _one_of(("slot64", "packed"))),
+    "PRIM_FORMAT": Knob("--prim-format", "slot64 or packed (40 B records, a beat-aligned row per leaf)", _one_of(("slot64", "packed"))),
     "NODE_CACHE": Knob("--node-cache", "0 or a power of two up to 65536", _cache),
     "NODE_WAYS": Knob("--node-ways", "a power of two 1..64", lambda v: _pow2(v) and v <= 64),
     "NODE_POLICY": Knob("--node-policy", f"one of {', '.join(POLICIES)}", _one_of(POLICIES)),

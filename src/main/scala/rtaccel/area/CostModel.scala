@@ -28,7 +28,7 @@ object CostModel {
   def caches(p: PlatformParams): Seq[CacheGeometry] = {
     val beat = p.axiDataBits / 8
     (if (p.nodeCache.entries > 0) Seq(CachePath.nodeGeometry(p.nodeCache, p, p.nodeStrideBytes / beat)) else Nil) ++
-      (if (p.primCache.entries > 0) Seq(CachePath.primGeometry(p.primCache, p.mppl, p, p.primStrideBytes / beat)) else Nil)
+      (if (p.primCache.entries > 0) Seq(CachePath.primGeometry(p.primCache, p.mppl, p, beat)) else Nil)
   }
 
   /** Block RAM of the caches' data arrays (lines x beats deep, one beat + its error bit wide). */

@@ -25,7 +25,7 @@ object Flags {
     f("tri-test", "ray-triangle test: mt (Moller-Trumbore, the paper's) | watertight (Woop et al. 2013) (TRI_TEST=)"),
     f("tri-format", "arithmetic of the triangle test: fp32 (TRI_FORMAT=)"),
     f("node-format", "node layout: full (6 fp32 planes per child), q<bits> (quantized planes) or fit (the narrowest the scene needs) (NODE_FORMAT=)"),
-    f("prim-format", "primitive layout: slot64 (9 fp32 + id in 64 B) or packed (40 B records per leaf, model only) (PRIM_FORMAT=)"),
+    f("prim-format", "primitive layout: slot64 (9 fp32 + id in 64 B) or packed (40 B records back to back, a beat-aligned row per leaf) (PRIM_FORMAT=)"),
     f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"),
     f("board", "board of boards/catalog.json (BOARD=): its memory bandwidth and clock unless MEM_GBPS / CLOCK_MHZ are given"),
     f("mem-gbps", "peak memory bandwidth in GB/s (MEM_GBPS=)"), f("clock-mhz", "platform clock in MHz (CLOCK_MHZ=)"),

@@ -145,7 +145,7 @@ object Simulate {
     val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
       bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
     // One folder per simulator build: everything that changes the circuit is in its name.
-    val imageBytes = img.numNodes.toLong * p.nodeStrideBytes + 4096 + img.numPrims.toLong * p.primStrideBytes
+    val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
     val rayCap = SimSetup.pow2(rays.count); val wordCap = SimSetup.pow2((imageBytes + axi.beatBytes - 1) / axi.beatBytes)
     val r = p.refs
     val key = s"tus${p.tus}-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
@@ -154,6 +154,7 @@ object Simulate {
       (if (p.shortStack > 0) s"-short${p.shortStack}.${p.treeLevels}" else "") +
       (if (p.boxFormat != rtaccel.fp.FpFormat.fp32) s"-box${p.boxFormat.name}" else "") +
       (if (p.triTest != rtaccel.config.TriTest.Mt) s"-tri${p.triTest.name}" else "") +
+      (if (p.primPacked) s"-packed${p.mppl}" else "") + // the leaf row (MPPL records) is a constant of the MC
       s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "")
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
@@ -232,7 +233,9 @@ object Simulate {
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
         "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
-        "prim_bytes_per_ray" -> counters("prim_requests") * p.primAccessBytes / n,
+        // packed: the MC's requested bytes less the nodes' (leafBytes per leaf, whole beats)
+        "prim_bytes_per_ray" -> (if (p.primPacked) (counters("mem_bytes") - counters("node_requests") * p.nodeStrideBytes).toDouble
+          else (counters("prim_requests") * p.primAccessBytes).toDouble) / n,
         "mem_utilisation" -> counters("mem_busy_beats") * axi.beatBytes / (math.max(1, cycles) * peakBytesPerCycle),
         "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall, "sim_build" -> build.name,
         "sim_cycles_per_cpu_s" -> stepped / math.max(1e-9, simCpu), "sim_cpu_s" -> simCpu,

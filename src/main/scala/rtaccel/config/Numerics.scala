@@ -50,11 +50,9 @@ object Numerics {
   {
     if (p.nodeQuantBits != 0) throw new InputError(s"NODE_FORMAT=${nodeFormatName(p.nodeQuantBits)} is modelled by trace, " +
       "cachesim, check, analyze and precision only: the IU's plane decoder is not built; use NODE_FORMAT=full for verilog, simulate and area")
-    if (p.primPacked) throw new InputError("PRIM_FORMAT=packed is modelled by trace, cachesim, check and precision only: the IU's " +
-      "record assembly across beats is not built; use PRIM_FORMAT=slot64 for verilog, simulate and area")
   }
   /** PRIM_FORMAT: slot64 = 9 fp32 coordinates + triangle id in a 64 B slot; packed = the same 40 B records back to
-    * back, beat-aligned per leaf (PlatformParams.leafBytes), in the model.
+    * back, a leaf per beat-aligned row of leafBytes(MPPL) (bvh.MemoryImage; the IU's iu.LeafAssembler cuts them out).
     */
   val primFormats: Seq[String] = Seq("slot64", "packed")
   val packedPrimBytes: Int = 40

@@ -86,7 +86,7 @@ final case class PlatformParams(
   boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // arithmetic of the slab test; narrower ones round outward
   triTest: TriTest = TriTest.Mt, // the ray-triangle test (Numerics: the formats every JSON line names)
   nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (model only, bvh.Quantize)
-  primPacked: Boolean = false // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (model only)
+  primPacked: Boolean = false // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (docs/numerics.md)
 ) {
   require(nodeQuantBits == 0 || (nodeQuantBits >= 2 && nodeQuantBits <= 16),
     s"NODE_FORMAT=q$nodeQuantBits: a quantized plane takes 2..16 bits (the 16-bit field of the node layout)")
@@ -127,6 +127,10 @@ final case class PlatformParams(
   def leafBytes(count: Int): Long =
     if (!primPacked) count.toLong * primAccessBytes
     else { val beat = axiDataBits / 8; (count.toLong * Numerics.packedPrimBytes + beat - 1) / beat * beat }
+  /** PRIM_FORMAT=packed: bytes of a leaf's row in the image, so that a leaf's address is primBase + row * rowBytes
+    * (a constant multiply, no table); slot64: MPPL slots (what a primitive cache line holds either way).
+    */
+  val leafRowBytes: Int = if (primPacked) leafBytes(mppl).toInt else mppl * primStrideBytes
   /** Bytes one node fetch moves (paper: 128 B for QBVH); defaults to the node's stored size. */
   val nodeAccessBytes: Int = if (nodeAccessBytesOverride > 0) nodeAccessBytesOverride else nodeSlotBytes
   /** The node cost the tree builder's SAH weighs: the full node's, so that NODE_FORMAT changes the boxes, not the tree. */

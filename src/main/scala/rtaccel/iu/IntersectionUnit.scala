@@ -61,7 +61,9 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int) extends Module {
   val primIdx = RegInit(0.U(8.W))
   io.mem.resp.ready := jobs.io.deq.valid
   val unitBeats = Mux(isLeaf, (primWords / beatWords).U, (nodeWords / beatWords).U)
-  val beatFire = io.mem.resp.fire
+  // PRIM_FORMAT=packed: a leaf's beats go to the LeafAssembler (its records span beats), not to this collection
+  val packedLeaf = p.primPacked.B && isLeaf
+  val beatFire = io.mem.resp.fire && !packedLeaf
   val unitDone = beatFire && beatIdx === unitBeats - 1.U
   val jobDone = unitDone && (!isLeaf || primIdx === job.lastPrim)
   // the words of the unit as they will be once this beat is stored (the last beat goes straight through)
@@ -97,6 +99,19 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int) extends Module {
   triIn.bits.words := VecInit(words.take(10))
   triIn.bits.last := jobDone
   triIn.bits.err := unitErr
+  if (p.primPacked) {
+    val asm = Module(new LeafAssembler(p, beatBits))
+    asm.io.in.valid := io.mem.resp.valid && jobs.io.deq.valid && isLeaf
+    asm.io.in.bits.beat := io.mem.resp.bits
+    asm.io.in.bits.lastPrim := job.lastPrim
+    asm.io.in.bits.ctx.tu := job.tu
+    asm.io.in.bits.ctx.ray := job.ray
+    asm.io.in.bits.ctx.tmax := job.tmax
+    io.mem.resp.ready := jobs.io.deq.valid && (!isLeaf || asm.io.in.ready)
+    jobs.io.deq.ready := Mux(isLeaf, asm.io.leafTaken, jobDone)
+    triIn.valid := asm.io.out.valid
+    triIn.bits := asm.io.out.bits
+  }
   io.box := boxPipe.io.out
   io.tri := triOut
 }

@@ -64,7 +64,9 @@ final case class McGeometry(p: PlatformParams, axi: AxiParams) {
     s"an AXI beat (${axi.beatBytes} B) must not exceed a node (${p.nodeStrideBytes} B) or a primitive slot (${p.primStrideBytes} B); narrow the bus")
   val nodeBeats: Int = p.nodeStrideBytes / axi.beatBytes
   val primBeats: Int = p.primStrideBytes / axi.beatBytes
-  val maxBeats: Int = math.max(nodeBeats, p.refs.maxLeafPrims * primBeats)
+  /** leaf addresses and burst lengths of the primitive format */
+  val leaf: LeafFetch = LeafFetch(p, axi.beatBytes)
+  val maxBeats: Int = math.max(nodeBeats, leaf.maxBeats)
   val beatsBits: Int = log2Ceil(maxBeats + 1)
   def memReq = new MemReq(axi.addrBits, beatsBits)
   def pathReq = new PathReq(axi.addrBits, beatsBits, p.hw.levelCodeBits)
@@ -162,6 +164,7 @@ class BurstSplitter(g: McGeometry, id: Int = 0) extends Module {
   * Decode (RefCodec layout, widths from p.refs): MSB of the refBits-wide ref = leaf flag.
   *   node ref: id = low nodeIdBits -> nodeStrideBytes at byte id * nodeStrideBytes (nodes start at 0)
   *   leaf ref: count = field + 1, first = low primIndexBits -> count * 64 B at primBase + first * 64
+  *             (PRIM_FORMAT=packed: leafBytes(count) at primBase + first * leafRowBytes, LeafFetch)
   * Requests are steered to the node path or the primitive path (FetchPath, the cache plug-in point); an
   * order FIFO records the path of every accepted request and the response mux follows it, so responses
   * leave in global request order whatever the paths do. The paths' DRAM reads share one AXI AR port through
@@ -208,8 +211,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     else ref(f.primIndexBits + f.countBits - 1, f.primIndexBits) +& 1.U
   def toAddr(x: UInt): UInt = x.pad(axi.addrBits)(axi.addrBits - 1, 0)
   val nodeAddr = toAddr(nodeId << log2Ceil(p.nodeStrideBytes))
-  val primAddr = toAddr(io.primBase +& (first << log2Ceil(p.primStrideBytes)))
-  val primBeatsLog = log2Ceil(g.primBeats)
+  val primAddr = toAddr(g.leaf.addr(io.primBase, first))
   // the node's level field, saturated to the level code every cache policy works with
   private val codeBits = p.hw.levelCodeBits; private val maxCode = p.hw.maxLevelCode
   val nodeLevel: UInt =
@@ -228,7 +230,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   for ((path, i) <- paths.zipWithIndex) {
     path.io.in.valid := io.req.valid && order.io.enq.ready && target === i.U
     path.io.in.bits.addr := (if (i == NodePath) nodeAddr else primAddr)
-    path.io.in.bits.beats := (if (i == NodePath) g.nodeBeats.U else (count << primBeatsLog))
+    path.io.in.bits.beats := (if (i == NodePath) g.nodeBeats.U else g.leaf.beats(count))
     path.io.in.bits.line := (if (i == NodePath) nodeId else first).pad(32)
     path.io.in.bits.level := (if (i == NodePath) nodeLevel else 0.U)
     path.io.primBase := io.primBase
@@ -303,7 +305,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   io.counters.nodeRequests := counter(1.U, reqFire && !isLeaf)
   io.counters.leafRequests := counter(1.U, reqFire && isLeaf)
   io.counters.primsRequested := counter(count, reqFire && isLeaf)
-  io.counters.bytesRequested := counter(Mux(isLeaf, count << log2Ceil(p.primStrideBytes), p.nodeStrideBytes.U), reqFire)
+  io.counters.bytesRequested := counter(Mux(isLeaf, g.leaf.bytes(count), p.nodeStrideBytes.U), reqFire)
   io.counters.busyBeats := counter(1.U, io.axi.r.fire)
   io.counters.readErrors := counter(1.U, io.axi.r.fire && io.axi.r.bits.resp =/= 0.U)
 

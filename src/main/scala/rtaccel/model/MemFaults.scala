@@ -18,6 +18,10 @@ final case class MemFaults(threshold: Int, seed: Int, beatBytes: Int, nodeStride
   /** A node fetch reads the node's whole slot. */
   def nodeBad(id: Int): Boolean = enabled && anyBad(id.toLong * nodeStrideBytes, nodeStrideBytes)
   def primBad(slot: Int): Boolean = enabled && anyBad(primBaseBytes + slot.toLong * primStrideBytes, primStrideBytes)
+  /** A primitive record of `bytes` at `offset` bytes from the primitive base is bad if any beat it spans is: a
+    * 64 B slot (its own beats), or a packed 40 B record, which may share a beat with its neighbours.
+    */
+  def recordBad(offset: Long, bytes: Int): Boolean = enabled && anyBad(primBaseBytes + offset, bytes)
 }
 
 object MemFaults {

@@ -31,7 +31,9 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private[this] val m = p.m
   private[this] val codec = img.codec
   private[this] val nodes = img.nodes; private[this] val nodeWords = img.nodeWords
-  private[this] val prims = img.prims; private[this] val primWords = img.primWords
+  private[this] val prims = img.prims
+  // record k of the leaf whose first field is f: word f * firstWords + k * recordWords (slot64 or packed rows)
+  private[this] val firstWords = img.firstWords; private[this] val recordWords = img.recordWords
   private[this] val faulty = faults.enabled
   private[this] val sRef = new Array[Int](p.stackDepth); private[this] val sT = new Array[Float](p.stackDepth)
   private[this] val sLvl = new Array[Int](p.stackDepth)
@@ -194,17 +196,17 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     val first = codec.firstPrim(ref); val n = codec.count(ref)
     sink.leaf(i, first, n, level); leafFetches += 1; primTests += n; primBytes += p.leafBytes(n)
     var tmax = tmax0
-    var s = first
-    while (s < first + n) {
-      val w = s * primWords // v0, v1, v2 as float bits, then the scene triangle id (MemoryImage)
-      if (faulty && faults.primBad(s)) primError = true
+    var k = 0
+    while (k < n) {
+      val w = first * firstWords + k * recordWords // v0, v1, v2 as float bits, then the scene triangle id (MemoryImage)
+      if (faulty && faults.recordBad(4L * w, img.recordBytes)) primError = true
       else if (if (watertight == null) RayTriangle.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)),
             f(prims(w + 4)), f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)
           else watertight.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)), f(prims(w + 4)),
             f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)) {
         tmax = tri.t; hitPrim = prims(w + 9); hitU = tri.u; hitV = tri.v
       }
-      s += 1
+      k += 1
     }
     tmax
   }

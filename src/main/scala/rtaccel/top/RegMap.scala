@@ -45,7 +45,8 @@ object RegMap {
     Field("BOX_FP", 0, 4, "0 = fp32, 1 = the narrower format of BOX_EXP_BITS / BOX_MAN_BITS, rounded outward"), Field("TRI_FP", 4, 4, "0 = fp32"), Field("NODE_BYTES_LOG2", 8, 4, "bytes per node slot"),
     Field("PRIM_BYTES_LOG2", 12, 4, "bytes per primitive slot"), Field("AXI_DATA_BYTES_LOG2", 16, 4, "memory bus beat"),
     Field("BOX_EXP_BITS", 20, 4, "exponent bits of the box test's format"), Field("BOX_MAN_BITS", 24, 5, "fraction bits of the box test's format"),
-    Field("TRI_TEST", 29, 2, "0 = Möller–Trumbore, 1 = watertight (Woop et al. 2013)")))
+    Field("TRI_TEST", 29, 2, "0 = Möller–Trumbore, 1 = watertight (Woop et al. 2013)"),
+    Field("PRIM_PACKED", 31, 1, "1 = PRIM_FORMAT=packed: 40 B records back to back, a leaf per row of ceil(MPPL x 40 / beat) beats (PRIM_BYTES_LOG2 does not apply)")))
   val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
     Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,
       "end the batch and clear status, interrupts and every counter (use only while STATUS.BUSY = 0)"),

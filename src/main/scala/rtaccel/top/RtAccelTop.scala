@@ -45,7 +45,8 @@ object RtAccelTop {
       NodeCache -> cache(NodeCache, p.nodeCache), PrimCache -> cache(PrimCache, p.primCache),
       Formats -> word(Formats, "NODE_BYTES_LOG2" -> log2Ceil(p.nodeStrideBytes), "PRIM_BYTES_LOG2" -> log2Ceil(p.primStrideBytes),
         "AXI_DATA_BYTES_LOG2" -> log2Ceil(p.axiDataBits / 8), "BOX_FP" -> (if (p.boxFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L),
-        "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong))
+        "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
+        "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)))
   }
 }
 

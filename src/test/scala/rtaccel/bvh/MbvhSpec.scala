@@ -69,6 +69,40 @@ class MbvhSpec extends AnyFunSuite {
       fx.foreach { case (_, s, _) => checkInvariants(s, PlatformParams(m = m, mppl = mppl)) }
     }
 
+  /** PRIM_FORMAT=packed, decoded from the raw words by the layout's definition: leaf row r at word r x rowWords with
+    * rowWords = ceil(MPPL x 40 B / beat) beats, record k 10 k words after; every record is its scene triangle and id,
+    * every leaf has its own row and the words past its records are zero.
+    */
+  def checkPacked(s: Scene, p0: PlatformParams): Unit = {
+    val p = p0.copy(primPacked = true)
+    val bvh = Mbvh.build(s, p)
+    val img = MemoryImage.pack(bvh, s, Fit.fitTo(p, bvh))
+    val beat = p.axiDataBits / 8
+    val rowWords = (p.mppl * 40 + beat - 1) / beat * beat / 4
+    val leaves = bvh.nodes.flatMap(n => n.children.zipWithIndex.filter(_._1.isLeaf).map { case (c, j) => (c, img.childRef(n.id, j)) })
+    assert(img.prims.length == leaves.length * rowWords, "one row per leaf")
+    val rows = leaves.map(l => img.codec.firstPrim(l._2))
+    assert(rows.sorted == rows.indices, "leaf rows are 0 .. leaves - 1, each once")
+    for ((c, ref) <- leaves) {
+      val row = img.codec.firstPrim(ref); assert(img.codec.count(ref) == c.count)
+      for (k <- 0 until c.count) {
+        val t = bvh.primOrder(c.firstPrim + k); val w = row * rowWords + 10 * k
+        assert(img.prims(w + 9) == t && img.primId(row, k) == t, s"leaf row $row record $k: id")
+        for (a <- 0 until 9) {
+          assert(img.prims(w + a) == java.lang.Float.floatToRawIntBits(s.coords(9 * t + a)), s"leaf row $row record $k word $a")
+          assert(java.lang.Float.floatToRawIntBits(img.primCoord(row, k, a)) == img.prims(w + a))
+        }
+      }
+      for (w <- row * rowWords + 10 * c.count until (row + 1) * rowWords) assert(img.prims(w) == 0, s"leaf row $row: padding word $w")
+    }
+  }
+
+  for (bus <- Seq(64, 128, 256, 512); mppl <- Seq(1, 3, 4, 16))
+    test(s"PRIM_FORMAT=packed image round trip: $bus-bit beats, MPPL=$mppl") {
+      for (seed <- 1 to 2) checkPacked(TestScenes.soup(seed, 60 + 111 * seed), PlatformParams(mppl = mppl, axiDataBits = bus))
+      TestScenes.fixtures.take(1).foreach { case (_, sc, _) => checkPacked(sc, PlatformParams(mppl = mppl, axiDataBits = bus)) }
+    }
+
   test("a one-triangle scene gets a root node with one leaf child") {
     val s = Scene("one", Array(0f, 0f, 0f, 1f, 0f, 0f, 0f, 1f, 0f))
     val bvh = Mbvh.build(s, PlatformParams())

@@ -12,7 +12,12 @@ class NumericsSpec extends AnyFunSuite {
     assert(packed.copy(axiDataBits = 64).leafBytes(3) == 120L && packed.copy(axiDataBits = 512).leafBytes(4) == 192L)
     assert(Numerics.parsePrimFormat("packed") && !Numerics.parsePrimFormat("slot64"))
     assert(intercept[InputError](Numerics.parsePrimFormat("slot32")).getMessage.contains("slot64 or packed"))
-    assert(intercept[InputError](Numerics.checkRtl(packed)).getMessage.contains("PRIM_FORMAT=slot64"))
+    Numerics.checkRtl(packed) // built in RTL (iu.LeafAssembler): no refusal
+    // a leaf row holds MPPL records in whole beats, so that a leaf's address is primBase + row x rowBytes
+    assert(packed.leafRowBytes == 160 && packed.copy(mppl = 1, axiDataBits = 512).leafRowBytes == 64 && slot.leafRowBytes == 256)
+    // the q<k> node refusal stays, with or without packed primitives
+    for (pk <- Seq(false, true))
+      assert(intercept[InputError](Numerics.checkRtl(PlatformParams(nodeQuantBits = 8, primPacked = pk))).getMessage.contains("NODE_FORMAT=full"))
   }
 
   test("every JSON line's numerics name the five knobs; TRI_FORMAT and TRI_TEST refusals name what exists") {

@@ -35,11 +35,12 @@ class PlatformSpec extends AnyFunSuite {
 
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
-                     short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt) = {
+                     short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
+                     packed: Boolean = false) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
-      shortStack = short, boxFormat = box, triTest = tri)
+      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed))
@@ -142,6 +143,34 @@ class PlatformSpec extends AnyFunSuite {
       val agree = (0 until rays.count).count(i => wt.hits.prim(i) == mt.prim(i))
       info(s"$agree of ${rays.count} rays hit the same primitive as with Möller–Trumbore")
       assert(agree > rays.count * 9 / 10, "the two triangle tests should disagree only at edges")
+    }
+
+  // PRIM_FORMAT=packed: 40 B records across beats (the IU's LeafAssembler), a leaf per row; the same work and hits as
+  // slot64 (the model of each format on its own image), fewer DRAM bytes per leaf. The primitive cache's line is a row.
+  private val packedCases = Seq(
+    ("8 TUs, DM node cache + 2-way LRU primitive cache, jitter + backpressure", 8, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 29, 30, 0.0),
+    ("1 TU, no cache", 1, 4, CacheParams(), CacheParams(), 0, 0, 0.0)) ++
+    (if (full) Seq(
+      ("1 TU, DM node + DM primitive caches, MPPL 3", 1, 3, CacheParams(64, 1, CachePolicy.Dm), CacheParams(48, 1, CachePolicy.Dm), 0, 0, 0.0),
+      ("4 TUs, MPPL 16, 4-way PLRU primitive cache", 4, 16, CacheParams(), CacheParams(128, 4, CachePolicy.Plru), 17, 0, 0.0),
+      ("4 TUs, memory read errors, 2-way LRU primitive cache", 4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 2, CachePolicy.Lru), 13, 0, 0.003))
+    else Nil)
+  for ((what, tus, mppl, node, prim, jitter, stall, rate) <- packedCases)
+    test(s"PRIM_FORMAT=packed, $what: bit-exact against the model, the slot64 hits, leafBytes per leaf") {
+      val seed = if (rate == 0) 1 else (1 to 1000).find(s => !MemFaults(MemFaults.threshold(rate), s, 32, 128, 0, 64).nodeBad(0)).get
+      val pk = runOne(tus, 4, mppl, rays, scene, jitter, stall, node, prim, errorRate = rate, seed = seed, packed = true); val j = pk.json
+      assert(j("numerics")("prim_format").str == "packed")
+      val (slot, _) = modelRun(Presets.paper2017.copy(tus = tus, mppl = mppl))
+      if (rate == 0) for (i <- 0 until rays.count)
+        assert(pk.hits.prim(i) == slot.prim(i) && java.lang.Float.floatToRawIntBits(pk.hits.t(i)) == java.lang.Float.floatToRawIntBits(slot.t(i)),
+          s"ray $i: the packed image's hit differs from slot64's")
+      // the DRAM bytes the MC requested for leaves are the model's leafBytes(count), summed
+      val b = Cli.build(scene, Presets.paper2017.copy(tus = tus, mppl = mppl, primPacked = true), fit = false, stack = Some(64))
+      val st = new rtaccel.model.RayStats
+      new rtaccel.model.Traversal(rtaccel.bvh.MemoryImage.pack(b.bvh, scene, b.params)).traceAll(rays, stats = st)
+      val leafBytes = j("counters")("mem_bytes").num - j("node_requests").num * b.params.nodeStrideBytes
+      info(f"primitive bytes per ray: packed ${leafBytes / rays.count}%.1f, slot64 ${st.primTests * 64.0 / rays.count}%.1f")
+      assert(leafBytes == st.primBytes.toDouble && leafBytes < st.primTests * 64.0, "leaf bytes differ from the model's leafBytes")
     }
 
   /** The reference model alone on this spec's scene and rays: its hits and node fetches. */

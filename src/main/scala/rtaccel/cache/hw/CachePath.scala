@@ -210,14 +210,15 @@ object CachePath {
     */
   def factory(node: CacheParams, prim: CacheParams, mppl: Int): (McGeometry, Int) => FetchPathModule = (g, i) =>
     if (i == FetchPath.Node && node.entries > 0) new CachePath(g, nodeGeometry(node, g.p, g.nodeBeats))
-    else if (i == FetchPath.Prim && prim.entries > 0) new CachePath(g, primGeometry(prim, mppl, g.p, g.primBeats))
+    else if (i == FetchPath.Prim && prim.entries > 0) new CachePath(g, primGeometry(prim, mppl, g.p, g.axi.beatBytes))
     else new FetchPath(g)
 
   /** A node cache line holds one node; a primitive cache line one leaf of up to MPPL primitives (also what the cost
-    * model tiles into block RAM, rtaccel.area.CostModel.caches).
+    * model tiles into block RAM, rtaccel.area.CostModel.caches): MPPL slots, or with PRIM_FORMAT=packed one leaf
+    * row (leafBytes(MPPL), keyed by the row number the reference holds).
     */
   def nodeGeometry(c: CacheParams, p: rtaccel.config.PlatformParams, nodeBeats: Int): CacheGeometry =
     CacheGeometry(c, 1, nodeBeats, p.nodeStrideBytes)
-  def primGeometry(c: CacheParams, mppl: Int, p: rtaccel.config.PlatformParams, primBeats: Int): CacheGeometry =
-    CacheGeometry(c, mppl, mppl * primBeats, p.primStrideBytes)
+  def primGeometry(c: CacheParams, mppl: Int, p: rtaccel.config.PlatformParams, beatBytes: Int): CacheGeometry =
+    CacheGeometry(c, mppl, p.leafRowBytes / beatBytes, p.primStrideBytes)
 }
