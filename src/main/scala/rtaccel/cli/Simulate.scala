@@ -131,7 +131,7 @@ object Simulate {
     val axi = AxiParams.of(p)
     val lay0 = ImageFile.layout(img, axi)
     // the poisoned beats the DRAM model will answer with SLVERR (MEM_ERROR_RATE), known to the model
-    val faults = MemFaults(o.errorThreshold, o.seed, axi.beatBytes, p.nodeStrideBytes, lay0.primBaseBytes, p.primStrideBytes)
+    val faults = MemFaults(o.errorThreshold, o.seed, axi.beatBytes, p.nodeSlotBytes, lay0.primBaseBytes, p.primStrideBytes)
     val tModel = System.nanoTime()
     val stats = new RayStats
     val rec = new AccessRecorder
@@ -145,7 +145,7 @@ object Simulate {
     val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
       bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
     // One folder per simulator build: everything that changes the circuit is in its name.
-    val imageBytes = img.numNodes.toLong * p.nodeStrideBytes + 4096 + img.numPrims.toLong * p.primStrideBytes
+    val imageBytes = img.numNodes.toLong * p.nodeSlotBytes + 4096 + img.numPrims.toLong * p.primStrideBytes
     val rayCap = SimSetup.pow2(rays.count); val wordCap = SimSetup.pow2((imageBytes + axi.beatBytes - 1) / axi.beatBytes)
     val r = p.refs
     val key = s"tus${p.tus}-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +

@@ -30,7 +30,8 @@ object Numerics {
     */
   val watertightBoxSlackLog2: Int = 19
   /** NODE_FORMAT: full = M children x 6 fp32 planes + reference (paper QBVH: 112 B in a 128 B slot); q<k> = k-bit
-    * planes on a per-node origin and power-of-two scale (bvh.Quantize), in the model; 0 bits means full.
+    * planes on a per-node origin and power-of-two scale (bvh.Quantize, stored as bvh.QNodeLayout, decoded in the
+    * IU by iu.NodeDecode); 0 bits means full.
     */
   private val Q = """q(\d+)""".r
   def parseNodeFormat(v: String): Int = v.toLowerCase match {
@@ -48,8 +49,6 @@ object Numerics {
   /** Refuses configurations the RTL does not build yet (verilog, simulate, area), naming the commands that model them. */
   def checkRtl(p: PlatformParams): Unit =
   {
-    if (p.nodeQuantBits != 0) throw new InputError(s"NODE_FORMAT=${nodeFormatName(p.nodeQuantBits)} is modelled by trace, " +
-      "cachesim, check, analyze and precision only: the IU's plane decoder is not built; use NODE_FORMAT=full for verilog, simulate and area")
     if (p.primPacked) throw new InputError("PRIM_FORMAT=packed is modelled by trace, cachesim, check and precision only: the IU's " +
       "record assembly across beats is not built; use PRIM_FORMAT=slot64 for verilog, simulate and area")
   }

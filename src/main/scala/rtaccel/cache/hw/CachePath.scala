@@ -217,7 +217,7 @@ object CachePath {
     * model tiles into block RAM, rtaccel.area.CostModel.caches).
     */
   def nodeGeometry(c: CacheParams, p: rtaccel.config.PlatformParams, nodeBeats: Int): CacheGeometry =
-    CacheGeometry(c, 1, nodeBeats, p.nodeStrideBytes)
+    CacheGeometry(c, 1, nodeBeats, p.nodeSlotBytes)
   def primGeometry(c: CacheParams, mppl: Int, p: rtaccel.config.PlatformParams, primBeats: Int): CacheGeometry =
     CacheGeometry(c, mppl, mppl * primBeats, p.primStrideBytes)
 }
