@@ -24,5 +24,6 @@ class NumericsSpec extends AnyFunSuite {
     assert(intercept[InputError](Numerics.checkTriFormat("fp64")).getMessage.contains("TRI_FORMAT=fp32"))
     assert(intercept[InputError](TriTest.parse("pluecker")).getMessage.contains("mt or watertight"))
     Numerics.checkRtl(PlatformParams(triTest = TriTest.Watertight)) // built in RTL: no refusal
+    Numerics.checkRtl(PlatformParams(nodeQuantBits = 8)) // NODE_FORMAT=q8 too (iu.NodeDecode)
   }
 }
