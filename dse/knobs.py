@@ -60,7 +60,7 @@ KNOBS = {
     "SHORT_STACK": Knob("--short-stack", "an integer 1..64", _int(1, 64)),
     "BOX_FORMAT": Knob("--box-format", "fp32, fp24, bf16, fp16 or e<E>m<M> with E <= 8, M <= 23", _box_format),
     "TRI_TEST": Knob("--tri-test", "mt or watertight", _one_of(("mt", "watertight"))),
-    "NODE_FORMAT": Knob("--node-format", "full or q2..q16 (quantized planes, model only)",
+    "NODE_FORMAT": Knob("--node-format", "full or q2..q16 (quantized planes)",
                         lambda v: isinstance(v, str) and re.fullmatch(r"full|q([2-9]|1[0-6])", v) is not None),
     "PRIM_FORMAT": Knob("--prim-format", "slot64 or packed (model only)", _one_of(("slot64", "packed"))),
     "NODE_CACHE": Knob("--node-cache", "0 or a power of two up to 65536", _cache),

@@ -98,7 +98,7 @@ def main(argv=None):
         for i, (box, tri, node, prim) in enumerate(opts):
             name = name_of(box, tri, node, prim)
             numerics = ["--box-format", box, "--tri-test", tri, "--node-format", node, "--prim-format", prim]
-            built = node == "full" and prim == "slot64"  # the formats the RTL builds
+            built = prim == "slot64"  # the formats the RTL builds (every NODE_FORMAT; PRIM_FORMAT=slot64 only)
             d = os.path.join(a.out, name.replace(":", "-"))
             print(f"[precision] {i + 1}/{len(opts)} {name}: trace", flush=True)
             tr = ask(jvm, "trace", common + numerics + ["--out", d, "--access-trace", "0", "--exhaustive", a.exhaustive])

@@ -18,7 +18,8 @@ class VerilogLintSpec extends AnyFunSuite {
       ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
       ("small", 4, 1, "--node-cache 64 --node-policy bf"),
       // the precision and stack options: outward-rounded boxes, the short stack with restart (1-entry ring too)
-      ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight")))
+      ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight"),
+      ("small", 4, 2, "--node-format q8 --node-cache 64")))
     test(s"$cfg with M=$m, TUs=$tus${if (caches.isEmpty) "" else s", caches $caches"} emits SystemVerilog that is lint clean") {
       val out = Files.createTempDirectory(s"lint-$cfg")
       val args = Array("--config", cfg, "--m", m.toString, "--tus", tus.toString, "--out", out.toString) ++
