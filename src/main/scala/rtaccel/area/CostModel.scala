@@ -27,7 +27,7 @@ object CostModel {
   /** The caches the MC builds for `p`, with the geometry CachePath uses. */
   def caches(p: PlatformParams): Seq[CacheGeometry] = {
     val beat = p.axiDataBits / 8
-    (if (p.nodeCache.entries > 0) Seq(CachePath.nodeGeometry(p.nodeCache, p, p.nodeStrideBytes / beat)) else Nil) ++
+    (if (p.nodeCache.entries > 0) Seq(CachePath.nodeGeometry(p.nodeCache, p, p.nodeSlotBytes / beat)) else Nil) ++
       (if (p.primCache.entries > 0) Seq(CachePath.primGeometry(p.primCache, p.mppl, p, beat)) else Nil)
   }
 

@@ -24,7 +24,7 @@ object Flags {
     f("box-format", "arithmetic of the ray-box test: fp32 | fp24 | bf16 | fp16 | e<E>m<M> | m<M> (BOX_FORMAT=; narrower ones round outward; m<M> fits the exponent to the scene)"),
     f("tri-test", "ray-triangle test: mt (Moller-Trumbore, the paper's) | watertight (Woop et al. 2013) (TRI_TEST=)"),
     f("tri-format", "arithmetic of the triangle test: fp32 (TRI_FORMAT=)"),
-    f("node-format", "node layout: full (6 fp32 planes per child), q<bits> (quantized planes) or fit (the narrowest the scene needs) (NODE_FORMAT=)"),
+    f("node-format", "node layout: full (6 fp32 planes per child), q<bits> (quantized planes, docs/numerics.md) or fit (the narrowest the scene needs) (NODE_FORMAT=)"),
     f("prim-format", "primitive layout: slot64 (9 fp32 + id in 64 B) or packed (40 B records back to back, a beat-aligned row per leaf) (PRIM_FORMAT=)"),
     f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"),
     f("board", "board of boards/catalog.json (BOARD=): its memory bandwidth and clock unless MEM_GBPS / CLOCK_MHZ are given"),

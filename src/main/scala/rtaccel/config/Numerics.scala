@@ -30,7 +30,8 @@ object Numerics {
     */
   val watertightBoxSlackLog2: Int = 19
   /** NODE_FORMAT: full = M children x 6 fp32 planes + reference (paper QBVH: 112 B in a 128 B slot); q<k> = k-bit
-    * planes on a per-node origin and power-of-two scale (bvh.Quantize), in the model; 0 bits means full.
+    * planes on a per-node origin and power-of-two scale (bvh.Quantize, stored as bvh.QNodeLayout, decoded in the
+    * IU by iu.NodeDecode); 0 bits means full.
     */
   private val Q = """q(\d+)""".r
   def parseNodeFormat(v: String): Int = v.toLowerCase match {
@@ -45,12 +46,6 @@ object Numerics {
     case _ => throw new InputError(s"PRIM_FORMAT=$v is not a primitive format; use ${primFormats.mkString(" or ")}")
   }
   def nodeFormatName(bits: Int): String = if (bits == 0) "full" else s"q$bits"
-  /** Refuses configurations the RTL does not build yet (verilog, simulate, area), naming the commands that model them. */
-  def checkRtl(p: PlatformParams): Unit =
-  {
-    if (p.nodeQuantBits != 0) throw new InputError(s"NODE_FORMAT=${nodeFormatName(p.nodeQuantBits)} is modelled by trace, " +
-      "cachesim, check, analyze and precision only: the IU's plane decoder is not built; use NODE_FORMAT=full for verilog, simulate and area")
-  }
   /** PRIM_FORMAT: slot64 = 9 fp32 coordinates + triangle id in a 64 B slot; packed = the same 40 B records back to
     * back, a leaf per beat-aligned row of leafBytes(MPPL) (bvh.MemoryImage; the IU's iu.LeafAssembler cuts them out).
     */

@@ -85,7 +85,7 @@ final case class PlatformParams(
   treeLevels: Int = 64, // node levels a TU can walk: the short stack keeps one trail counter per level
   boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // arithmetic of the slab test; narrower ones round outward
   triTest: TriTest = TriTest.Mt, // the ray-triangle test (Numerics: the formats every JSON line names)
-  nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (model only, bvh.Quantize)
+  nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (bvh.Quantize, bvh.QNodeLayout)
   primPacked: Boolean = false // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (docs/numerics.md)
 ) {
   require(nodeQuantBits == 0 || (nodeQuantBits >= 2 && nodeQuantBits <= 16),
@@ -117,7 +117,8 @@ final case class PlatformParams(
   val primBits: Int = 9 * 32
   val primStrideBytes: Int = 64
   /** Bytes a node occupies in NODE_FORMAT: the full node's slot, or the quantized node (bvh.Quantize) rounded up to
-    * a power of two (M=4, q8: 64 B).
+    * a power of two (M=4, q8: 64 B). The stride of the node array in memory, the node fetch's beats and a node
+    * cache line of the RTL.
     */
   val nodeSlotBytes: Int = if (nodeQuantBits == 0) nodeStrideBytes
     else Integer.highestOneBit(math.max(1, (rtaccel.bvh.Quantize.nodeBits(m, nodeQuantBits) + 7) / 8 - 1)) << 1

@@ -128,6 +128,21 @@ object Fp {
     Mux(ovf, ovfValue, Cat(sign, sum(e + m - 1, 0)))
   }
 
+  /** q * 2^e in format f (q unsigned, e two's complement), +0 for q = 0 and +inf past the largest finite value.
+    * Exact otherwise: q fits the significand and every e of its width keeps q * 2^e on f's subnormal grid
+    * (both checked here), so the rounding of roundPack never acts. The int-to-float and the scale of a
+    * quantized node's planes (iu.NodeDecode).
+    */
+  def fromUIntScaled(f: FpFormat, q: UInt, e: SInt): UInt = {
+    val w = q.getWidth
+    require(w <= f.manBits + 1, s"a $w-bit integer does not fit the ${f.manBits + 1}-bit significand of ${f.name}")
+    require(-(BigInt(1) << (e.getWidth - 1)) >= 1 - f.bias - f.manBits,
+      s"a ${e.getWidth}-bit scale reaches below the smallest subnormal of ${f.name}: the product would round")
+    val ew = (e.getWidth max expW(f)) + 1
+    val ex = e.pad(ew) + (f.bias + w - 1).S(ew.W) // sig q read as q / 2^(w-1): biased exponent e + bias + w - 1
+    Mux(q === 0.U, 0.U(f.width.W), roundPack(f, false.B, ex, q, false.B))
+  }
+
   // ---------------------------------------------------------------------------------------------------------
   // add / sub
 

@@ -13,7 +13,7 @@ final case class ImageLayout(primBaseBytes: Long, words: Int)
 
 /** Writes a MemoryImage as a `$readmemh` file for the DRAM model: one line per AXI word of dataBits/4 hex
   * digits, little-endian (byte b lives in word b / beatBytes at bit 8 * (b % beatBytes)).
-  * Nodes at byte 0 (node n at n * nodeStrideBytes), primitives from primBaseBytes = end of nodes rounded
+  * Nodes at byte 0 (node n at n * nodeSlotBytes, in NODE_FORMAT's layout), primitives from primBaseBytes = end of nodes rounded
   * up to 4096 B (slot s at primBaseBytes + 64 s).
   */
 object ImageFile {

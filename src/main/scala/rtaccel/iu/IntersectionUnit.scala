@@ -23,7 +23,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int) extends Module {
     }
   })
   private val beatWords = beatBits / 32
-  private val nodeWords = p.nodeStrideBytes / 4
+  private val nodeWords = p.nodeSlotBytes / 4 // the stored node: full, or quantized (NodeDecode)
   private val primWords = p.primStrideBytes / 4
   require(beatWords <= primWords && nodeWords % beatWords == 0, s"a memory beat of $beatBits bits must divide a node and a primitive")
   private val primFlagBit = p.refs.refBits - 1
@@ -81,12 +81,13 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int) extends Module {
   jobs.io.deq.ready := jobDone
 
   val boxPipe = Module(new BoxPipe(p))
-  boxPipe.io.in.valid := unitDone && !isLeaf
-  boxPipe.io.in.bits.tu := job.tu
-  boxPipe.io.in.bits.ray := job.ray
-  boxPipe.io.in.bits.tmax := job.tmax
-  boxPipe.io.in.bits.words := VecInit(words.take(7 * p.m))
-  boxPipe.io.in.bits.err := unitErr
+  val node = Wire(new NodeJob(p))
+  node.tu := job.tu
+  node.ray := job.ray
+  node.tmax := job.tmax
+  node.words := VecInit(words.take(nodeWords))
+  node.err := unitErr
+  boxPipe.io.in := NodeDecode.toBoxJob(p, unitDone && !isLeaf, node)
   // TRI_TEST: both pipes take the same job and give the same result, at their own latencies
   val (triIn, triOut) = p.triTest match {
     case TriTest.Mt => val t = Module(new TriPipe(p)); (t.io.in, t.io.out)

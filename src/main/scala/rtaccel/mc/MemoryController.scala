@@ -60,9 +60,9 @@ class McCounters extends Bundle {
 
 /** Sizes shared by the MC and its paths. */
 final case class McGeometry(p: PlatformParams, axi: AxiParams) {
-  require(axi.beatBytes <= p.primStrideBytes && axi.beatBytes <= p.nodeStrideBytes,
-    s"an AXI beat (${axi.beatBytes} B) must not exceed a node (${p.nodeStrideBytes} B) or a primitive slot (${p.primStrideBytes} B); narrow the bus")
-  val nodeBeats: Int = p.nodeStrideBytes / axi.beatBytes
+  require(axi.beatBytes <= p.primStrideBytes && axi.beatBytes <= p.nodeSlotBytes,
+    s"an AXI beat (${axi.beatBytes} B) must not exceed a node (${p.nodeSlotBytes} B) or a primitive slot (${p.primStrideBytes} B); narrow the bus")
+  val nodeBeats: Int = p.nodeSlotBytes / axi.beatBytes
   val primBeats: Int = p.primStrideBytes / axi.beatBytes
   /** leaf addresses and burst lengths of the primitive format */
   val leaf: LeafFetch = LeafFetch(p, axi.beatBytes)
@@ -210,7 +210,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     if (f.countBits == 0) 1.U(1.W)
     else ref(f.primIndexBits + f.countBits - 1, f.primIndexBits) +& 1.U
   def toAddr(x: UInt): UInt = x.pad(axi.addrBits)(axi.addrBits - 1, 0)
-  val nodeAddr = toAddr(nodeId << log2Ceil(p.nodeStrideBytes))
+  val nodeAddr = toAddr(nodeId << log2Ceil(p.nodeSlotBytes))
   val primAddr = toAddr(g.leaf.addr(io.primBase, first))
   // the node's level field, saturated to the level code every cache policy works with
   private val codeBits = p.hw.levelCodeBits; private val maxCode = p.hw.maxLevelCode
@@ -305,7 +305,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   io.counters.nodeRequests := counter(1.U, reqFire && !isLeaf)
   io.counters.leafRequests := counter(1.U, reqFire && isLeaf)
   io.counters.primsRequested := counter(count, reqFire && isLeaf)
-  io.counters.bytesRequested := counter(Mux(isLeaf, g.leaf.bytes(count), p.nodeStrideBytes.U), reqFire)
+  io.counters.bytesRequested := counter(Mux(isLeaf, g.leaf.bytes(count), p.nodeSlotBytes.U), reqFire)
   io.counters.busyBeats := counter(1.U, io.axi.r.fire)
   io.counters.readErrors := counter(1.U, io.axi.r.fire && io.axi.r.bits.resp =/= 0.U)
 

@@ -30,7 +30,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private[this] val p = img.p
   private[this] val m = p.m
   private[this] val codec = img.codec
-  private[this] val nodes = img.nodes; private[this] val nodeWords = img.nodeWords
+  private[this] val nodes = img.planes; private[this] val nodeWords = img.planeWords // full layout (decoded for q<k>)
   private[this] val prims = img.prims
   // record k of the leaf whose first field is f: word f * firstWords + k * recordWords (slot64 or packed rows)
   private[this] val firstWords = img.firstWords; private[this] val recordWords = img.recordWords
@@ -216,7 +216,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     */
   private def hitChildren(tmax: Float, id: Int): Int = {
     var k = 0; var j = 0
-    var w = id * nodeWords // child j: min x,y,z, max x,y,z (float bits), ref at w .. w+6 (MemoryImage)
+    var w = id * nodeWords // child j: min x,y,z, max x,y,z (float bits), ref at w .. w+6 (MemoryImage.planes)
     while (j < m) {
       val ref = nodes(w + 6)
       if (!codec.isEmpty(ref)) {

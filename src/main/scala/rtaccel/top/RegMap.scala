@@ -26,7 +26,7 @@ object RegMap {
 
   /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
   val VersionMajor = 2
-  val VersionMinor = 0
+  val VersionMinor = 1
   val Magic: Long = 0x52544143L // "RTAC"
 
   val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
@@ -47,6 +47,8 @@ object RegMap {
     Field("BOX_EXP_BITS", 20, 4, "exponent bits of the box test's format"), Field("BOX_MAN_BITS", 24, 5, "fraction bits of the box test's format"),
     Field("TRI_TEST", 29, 2, "0 = Möller–Trumbore, 1 = watertight (Woop et al. 2013)"),
     Field("PRIM_PACKED", 31, 1, "1 = PRIM_FORMAT=packed: 40 B records back to back, a leaf per row of ceil(MPPL x 40 / beat) beats (PRIM_BYTES_LOG2 does not apply)")))
+  val Formats2 = Reg("FORMATS2", 0x01C, RO, "memory layouts (FORMATS has no room left)", Seq(
+    Field("NODE_QUANT_BITS", 0, 5, "0 = full fp32 nodes, k = NODE_FORMAT=q<k> quantized nodes (docs/numerics.md)")))
   val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
     Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,
       "end the batch and clear status, interrupts and every counter (use only while STATUS.BUSY = 0)"),
@@ -74,7 +76,7 @@ object RegMap {
       Reg(s"CNT_${n.toUpperCase}_HI", CounterBase + 8 * i + 4, RO, s"counter $n, bits 63..32 of the last LO snapshot"))
   }
 
-  val fixed: Seq[Reg] = Seq(Id, Version, Config0, Config1, NodeCache, PrimCache, Formats, Control, Status, IrqEnable,
+  val fixed: Seq[Reg] = Seq(Id, Version, Config0, Config1, NodeCache, PrimCache, Formats, Formats2, Control, Status, IrqEnable,
     IrqStatus, MaxLevel, RayCount, PrimBaseLo, PrimBaseHi, HitsDone, RaysIn)
   def all(counterNames: Seq[String]): Seq[Reg] = fixed ++ counterRegs(counterNames)
   /** Address bits of the AXI4-Lite port: the map with every counter fits. */

@@ -43,10 +43,11 @@ object RtAccelTop {
       Config1 -> word(Config1, "STACK_DEPTH" -> p.stackDepth, "LEVEL_BITS" -> p.refs.levelBits, "COUNT_BITS" -> p.refs.countBits,
         "NODE_ID_BITS" -> p.refs.nodeIdBits),
       NodeCache -> cache(NodeCache, p.nodeCache), PrimCache -> cache(PrimCache, p.primCache),
-      Formats -> word(Formats, "NODE_BYTES_LOG2" -> log2Ceil(p.nodeStrideBytes), "PRIM_BYTES_LOG2" -> log2Ceil(p.primStrideBytes),
+      Formats -> word(Formats, "NODE_BYTES_LOG2" -> log2Ceil(p.nodeSlotBytes), "PRIM_BYTES_LOG2" -> log2Ceil(p.primStrideBytes),
         "AXI_DATA_BYTES_LOG2" -> log2Ceil(p.axiDataBits / 8), "BOX_FP" -> (if (p.boxFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L),
         "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
-        "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)))
+        "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
+      Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong))
   }
 }
 

@@ -12,12 +12,10 @@ class NumericsSpec extends AnyFunSuite {
     assert(packed.copy(axiDataBits = 64).leafBytes(3) == 120L && packed.copy(axiDataBits = 512).leafBytes(4) == 192L)
     assert(Numerics.parsePrimFormat("packed") && !Numerics.parsePrimFormat("slot64"))
     assert(intercept[InputError](Numerics.parsePrimFormat("slot32")).getMessage.contains("slot64 or packed"))
-    Numerics.checkRtl(packed) // built in RTL (iu.LeafAssembler): no refusal
     // a leaf row holds MPPL records in whole beats, so that a leaf's address is primBase + row x rowBytes
     assert(packed.leafRowBytes == 160 && packed.copy(mppl = 1, axiDataBits = 512).leafRowBytes == 64 && slot.leafRowBytes == 256)
-    // the q<k> node refusal stays, with or without packed primitives
-    for (pk <- Seq(false, true))
-      assert(intercept[InputError](Numerics.checkRtl(PlatformParams(nodeQuantBits = 8, primPacked = pk))).getMessage.contains("NODE_FORMAT=full"))
+    // every node and primitive format together is a circuit the RTL builds (iu.NodeDecode, iu.LeafAssembler)
+    for (k <- Seq(0, 8); pk <- Seq(false, true)) rtaccel.cache.hw.CachePath.validate(PlatformParams(nodeQuantBits = k, primPacked = pk))
   }
 
   test("every JSON line's numerics name the five knobs; TRI_FORMAT and TRI_TEST refusals name what exists") {
@@ -28,6 +26,6 @@ class NumericsSpec extends AnyFunSuite {
       j("tri_test").str == "watertight" && j("tri_format").str == "fp32")
     assert(intercept[InputError](Numerics.checkTriFormat("fp64")).getMessage.contains("TRI_FORMAT=fp32"))
     assert(intercept[InputError](TriTest.parse("pluecker")).getMessage.contains("mt or watertight"))
-    Numerics.checkRtl(PlatformParams(triTest = TriTest.Watertight)) // built in RTL: no refusal
+    rtaccel.cache.hw.CachePath.validate(PlatformParams(triTest = TriTest.Watertight)) // built in RTL: no refusal
   }
 }

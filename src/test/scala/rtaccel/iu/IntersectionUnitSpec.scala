@@ -38,7 +38,7 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   private def sim(p: PlatformParams, beatBits: Int) = {
     val r = p.refs
     Seq(VerilatorBackendAnnotation, VerilatorCFlags(Seq("-O1")), CachingAnnotation, TargetDirAnnotation(
-      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}"))
+      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}"))
   }
 
   private def soupImage(seed: Long, p0: PlatformParams, fit: Boolean): MemoryImage = {
@@ -54,7 +54,7 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     val codec = new RefCodec(p.refs)
     val m = p.m
     val beatWords = beatBits / 32
-    val nodeWords = p.nodeStrideBytes / 4; val primWords = p.primStrideBytes / 4
+    val nodeWords = p.nodeSlotBytes / 4; val primWords = p.primStrideBytes / 4
     val nodeRefs = 0 +: (0 until img.numNodes).flatMap(n => (0 until m).map(img.childRef(n, _))).filter(r => r != 0 && !codec.isPrim(r))
     val leafRefs = (0 until img.numNodes).flatMap(n => (0 until m).map(img.childRef(n, _))).filter(codec.isPrim)
     assert(leafRefs.exists(codec.count(_) > 1), "the image needs leaves of several primitives")
@@ -228,6 +228,15 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
         "the traffic must contain hits, poisoned nodes and primitives, and leaves with good and poisoned primitives")
       assert(s.maxOutstanding >= 2 && s.maxOutstanding <= tus, "requests overlap, at most one per TU")
     }
+
+  // NODE_FORMAT=q8: memory sends the quantized 64 B node, the expected boxes are the model's decoded planes
+  test("NODE_FORMAT=q8, TUs=3 M=4, 256-bit beats: results equal RayBox on the decoded planes bit for bit; poisoned beats (2000 requests, seed 5)") {
+    val img = soupImage(5L, PlatformParams(tus = 3, m = 4, mppl = 4, nodeQuantBits = 8), fit = false)
+    assert(img.nodeWords == 16)
+    val s = run(img, 256, 2000, 5L, errPercent = 3)
+    info(report(s))
+    assert(s.boxHits > 0 && s.triHits > 0 && s.badNodes > 0 && s.badPrims > 0)
+  }
 
   test("no memory errors: every result is clean, TUs=4 M=4 (1000 requests, seed 4)") {
     val img = soupImage(1L, PlatformParams(tus = 4, m = 4, mppl = 4), fit = false)

@@ -36,11 +36,11 @@ class PlatformSpec extends AnyFunSuite {
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
-                     packed: Boolean = false) = {
+                     packed: Boolean = false, nodeQuant: Int = 0) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
-      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed)
+      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed))
@@ -148,9 +148,8 @@ class PlatformSpec extends AnyFunSuite {
   // PRIM_FORMAT=packed: 40 B records across beats (the IU's LeafAssembler), a leaf per row; the same work and hits as
   // slot64 (the model of each format on its own image), fewer DRAM bytes per leaf. The primitive cache's line is a row.
   private val packedCases = Seq(
-    ("8 TUs, DM node cache + 2-way LRU primitive cache, jitter + backpressure", 8, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 29, 30, 0.0),
-    ("1 TU, no cache", 1, 4, CacheParams(), CacheParams(), 0, 0, 0.0)) ++
-    (if (full) Seq(
+    ("8 TUs, DM node cache + 2-way LRU primitive cache, jitter + backpressure", 8, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 29, 30, 0.0)) ++
+    (if (full) Seq(("1 TU, no cache", 1, 4, CacheParams(), CacheParams(), 0, 0, 0.0),
       ("1 TU, DM node + DM primitive caches, MPPL 3", 1, 3, CacheParams(64, 1, CachePolicy.Dm), CacheParams(48, 1, CachePolicy.Dm), 0, 0, 0.0),
       ("4 TUs, MPPL 16, 4-way PLRU primitive cache", 4, 16, CacheParams(), CacheParams(128, 4, CachePolicy.Plru), 17, 0, 0.0),
       ("4 TUs, memory read errors, 2-way LRU primitive cache", 4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 2, CachePolicy.Lru), 13, 0, 0.003))
@@ -171,6 +170,23 @@ class PlatformSpec extends AnyFunSuite {
       val leafBytes = j("counters")("mem_bytes").num - j("node_requests").num * b.params.nodeStrideBytes
       info(f"primitive bytes per ray: packed ${leafBytes / rays.count}%.1f, slot64 ${st.primTests * 64.0 / rays.count}%.1f")
       assert(leafBytes == st.primBytes.toDouble && leafBytes < st.primTests * 64.0, "leaf bytes differ from the model's leafBytes")
+    }
+
+  // NODE_FORMAT=q<k>: the IU decodes the quantized image (NodeDecode) to the planes the model's traversal decodes;
+  // a node fetch moves the 64 B slot. 8 TUs with a node cache in make test; 1 TU and q4 with both caches in make regress.
+  private val quantCases = Seq((8, 8, CacheParams(64, 2, CachePolicy.Lru), CacheParams(), 17)) ++
+    (if (full) Seq((1, 8, CacheParams(), CacheParams(), 0), (4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 31)) else Nil)
+  for ((tus, k, node, prim, jitter) <- quantCases)
+    test(s"NODE_FORMAT=q$k at $tus TU(s)${if (node.entries > 0) " with caches" else ""}: bit-exact against the model, half the node bytes") {
+      val q = runOne(tus, 4, 4, rays, scene, jitter, node = node, prim = prim, nodeQuant = k)
+      val (fp, fullNodes) = modelRun(Presets.paper2017.copy(tus = tus))
+      val j = q.json
+      info(f"node fetches: q$k ${j("node_requests").num}%.0f, full $fullNodes; node bytes/ray q$k ${j("node_bytes_per_ray").num}%.1f")
+      assert(j("numerics")("node_format").str == s"q$k" && j("counters")("mem_bytes").num ==
+        j("node_requests").num * 64 + j("prim_requests").num * 64, "a quantized node fetch moves its 64 B slot")
+      val agree = (0 until rays.count).count(i => q.hits.prim(i) == fp.prim(i))
+      info(s"$agree of ${rays.count} rays hit the same primitive as with full nodes")
+      assert(agree > rays.count * 9 / 10, "larger boxes should change hits only at ties and edges")
     }
 
   /** The reference model alone on this spec's scene and rays: its hits and node fetches. */

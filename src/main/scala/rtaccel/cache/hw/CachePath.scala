@@ -192,7 +192,6 @@ object CachePath {
   /** Refuses cache configurations the RTL cannot build, with what to change (InputError: one `error:` line). */
   def validate(p: rtaccel.config.PlatformParams): Unit = {
     def fail(msg: String) = throw new rtaccel.io.InputError(msg)
-    rtaccel.config.Numerics.checkRtl(p)
     rtaccel.config.Fit.checkLevelField(p)
     for ((what, c) <- Seq("NODE" -> p.nodeCache, "PRIM" -> p.primCache) if c.entries > 0) {
       val pol = try Policies.of(c.policy, c.ways) catch { case e: IllegalArgumentException => fail(s"${what}_POLICY: ${e.getMessage.stripPrefix("requirement failed: ")}") }
@@ -218,7 +217,7 @@ object CachePath {
     * row (leafBytes(MPPL), keyed by the row number the reference holds).
     */
   def nodeGeometry(c: CacheParams, p: rtaccel.config.PlatformParams, nodeBeats: Int): CacheGeometry =
-    CacheGeometry(c, 1, nodeBeats, p.nodeStrideBytes)
+    CacheGeometry(c, 1, nodeBeats, p.nodeSlotBytes)
   def primGeometry(c: CacheParams, mppl: Int, p: rtaccel.config.PlatformParams, beatBytes: Int): CacheGeometry =
     CacheGeometry(c, mppl, p.leafRowBytes / beatBytes, p.primStrideBytes)
 }
