@@ -46,7 +46,7 @@ class SimulateSpec extends AnyFunSuite {
 
   test("WAVES=1 writes the asked cycle window as a VCD: values at its first cycle, changes up to its last") {
     val out = dir.resolve("waves")
-    val (code, stdout, err) = sim(out, "--waves", "1", "--waves-from", "100", "--waves-to", "160")
+    val (code, stdout, err) = sim(out, "--waves", "1", "--waves-from", "100", "--waves-to", "160", "--sim-build", "o0")
     assert(code == 0, err)
     val w = last(stdout)("waves")
     val vcd = Files.readAllLines(out.resolve("waves.vcd")).toArray(Array[String]()).toSeq
