@@ -21,7 +21,9 @@ class VerilogLintSpec extends AnyFunSuite {
       ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight"),
       // packed primitives: the IU's LeafAssembler, the MC's row address (a constant multiply) and a leaf-row cache line
       ("paper2017", 4, 2, "--prim-format packed --prim-cache 64 --prim-ways 2"),
-      ("small", 4, 2, "--node-format q8 --node-cache 64")))
+      ("small", 4, 2, "--node-format q8 --node-cache 64")) ++
+      // TRI_FORMAT=fp64: the widened Möller–Trumbore pipe (make regress only: a large circuit to lint)
+      (if (sys.env.get("RTACCEL_REGRESS").contains("full")) Seq(("small", 4, 2, "--tri-format fp64")) else Nil))
     test(s"$cfg with M=$m, TUs=$tus${if (caches.isEmpty) "" else s", caches $caches"} emits SystemVerilog that is lint clean") {
       val out = Files.createTempDirectory(s"lint-$cfg")
       val args = Array("--config", cfg, "--m", m.toString, "--tus", tus.toString, "--out", out.toString) ++
