@@ -11,7 +11,8 @@ import rtaccel.fp.FpFormat
 import rtaccel.model.{PreparedRay, RayBox, RayBoxOutward, RayTriangle}
 
 /** The IU's box and triangle pipelines against the reference model's RayBox / RayTriangle, bit for bit,
-  * one job per cycle: random jobs mixed with the edge classes of docs/numerics.md.
+  * one job per cycle: random jobs mixed with the edge classes of docs/numerics.md; TriPipe in a wider TRI_FORMAT
+  * against its SoftFloat twin (model.RayTriangleWide).
   */
 class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   private def bits(f: Float): BigInt = BigInt(java.lang.Float.floatToRawIntBits(f)) & 0xffffffffL
