@@ -132,7 +132,7 @@ PRECISION_EXHAUSTIVE ?= 1000
 precision: TUS ?= 32
 precision: NODE_CACHE ?= 8192
 precision: deps
-	@[ -z "$(BOX_FORMAT)$(TRI_TEST)" ] || { echo "error: make precision runs every option itself; list them in PRECISION_OPTIONS=\"fp32:mt bf16:watertight ...\" instead of BOX_FORMAT= / TRI_TEST=" >&2; exit 2; }
+	@[ -z "$(BOX_FORMAT)$(TRI_TEST)$(TRI_FORMAT)" ] || { echo "error: make precision runs every option itself; list them in PRECISION_OPTIONS=\"fp32:mt bf16:watertight fp32:mt@fp64 ...\" instead of BOX_FORMAT= / TRI_TEST= / TRI_FORMAT=" >&2; exit 2; }
 	@test -f "$(SCENE)" || { echo "error: scene '$(SCENE)' not found; give SCENE=<path to .obj or .ply>" >&2; exit 2; }
 	@OUT=$${OUT:-build/precision/$$(basename $(SCENE) | sed 's/\.[a-z]*$$//')}; G=$(GOLDEN); mkdir -p $$OUT; \
 	  if [ -z "$$G" ]; then G=$$OUT/golden; [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=$$G >&2 || exit $$?; fi; \

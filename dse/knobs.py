@@ -50,6 +50,12 @@ def _box_format(v):
             or (f is not None and 2 <= int(f[1]) <= 23))
 
 
+def _tri_format(v):
+    # config.Numerics.parseTriFormat: fp32 or wider, at most fp64's 11 exponent and 52 fraction bits
+    m = re.fullmatch(r"e(\d+)m(\d+)", v) if isinstance(v, str) else None
+    return v in ("fp32", "fp64") or (m is not None and 8 <= int(m[1]) <= 11 and 23 <= int(m[2]) <= 52)
+
+
 def _cache(v):
     return v == 0 or (_pow2(v) and v <= 1 << 16)
 
@@ -63,6 +69,7 @@ KNOBS = {
     "SHORT_STACK": Knob("--short-stack", "an integer 1..64", _int(1, 64)),
     "BOX_FORMAT": Knob("--box-format", "fp32, fp24, bf16, fp16, e<E>m<M> with E <= 8, M <= 23, or m<M> (exponent fitted to the scene)", _box_format),
     "TRI_TEST": Knob("--tri-test", "mt or watertight", _one_of(("mt", "watertight"))),
+    "TRI_FORMAT": Knob("--tri-format", "fp32, fp64 or e<E>m<M> with 8 <= E <= 11, 23 <= M <= 52 (Möller–Trumbore only)", _tri_format),
     "NODE_FORMAT": Knob("--node-format", "full, q2..q16 (quantized planes) or fit",
                         lambda v: isinstance(v, str) and re.fullmatch(r"full|fit|q([2-9]|1[0-6])", v) is not None),
     "PRIM_FORMAT": Knob("--prim-format", "slot64 or packed (40 B records, a beat-aligned row per leaf)", _one_of(("slot64", "packed"))),

@@ -1,6 +1,8 @@
 """make precision — every numerics option on one set of rays: accuracy, work, bandwidth, speed and cost.
 
-One row per option (BOX_FORMAT x TRI_TEST, docs/numerics.md "The trade, measured"), all from the same golden rays:
+One row per option (BOX_FORMAT x TRI_TEST, docs/numerics.md "The trade, measured"), all from the same golden rays.
+An option is BOX_FORMAT:TRI_TEST[@TRI_FORMAT][:NODE_FORMAT[:PRIM_FORMAT]], e.g. fp32:mt, bf16:watertight:q8:packed,
+fp32:mt@fp64 (Möller–Trumbore in binary64, t/u/v rounded to fp32; TRI_FORMAT defaults to fp32):
   accuracy   agreement with Embree as `make check` classifies it; hits that differ from the fp32 Möller–Trumbore
              baseline (another primitive, or the same with other t bits; the largest relative t difference) and
              the classes of those differences; hits a box test lost (the traversal against every
@@ -32,7 +34,7 @@ DEFAULT_OPTIONS = ["fp32:mt", "fp24:mt", "fp16:mt", "bf16:mt", "fp32:watertight"
                    "fp16:watertight", "bf16:watertight", "fp32:mt:q8", "fp32:mt:q12", "fp32:mt:full:packed",
                    "fp32:mt:q8:packed", "bf16:watertight:q8:packed"]
 BASELINE = "fp32:mt"
-COLUMNS = ["option", "box_format", "tri_test", "node_format", "prim_format", "rays", "agree", "classified", "unexplained", "max_rel_t_err",
+COLUMNS = ["option", "box_format", "tri_test", "tri_format", "node_format", "prim_format", "rays", "agree", "classified", "unexplained", "max_rel_t_err",
            "differ_from_baseline", "prim_differs_from_baseline", "max_rel_t_vs_baseline", "differ_classes", "exhaustive_rays", "lost_hits",
            "node_fetches_per_ray", "box_tests_per_ray", "prim_tests_per_ray",
            "node_bytes_per_ray", "prim_bytes_per_ray", "node_bytes_per_ray_nocache", "prim_bytes_per_ray_nocache",
@@ -43,9 +45,10 @@ def parse_options(text):
     out = []
     for item in text.replace(",", " ").split():
         parts = item.split(":")
-        if len(parts) not in (2, 3, 4) or not all(parts) or parts[1] not in ("mt", "watertight"):
-            raise UserError(f"--options: '{item}' is not BOX_FORMAT:TRI_TEST[:NODE_FORMAT[:PRIM_FORMAT]] "
-                            "(e.g. fp32:mt, bf16:watertight:q8, fp32:mt:full:packed)")
+        test, _, fmt = parts[1].partition("@") if len(parts) > 1 else ("", "", "")
+        if len(parts) not in (2, 3, 4) or not all(parts) or test not in ("mt", "watertight") or (parts[1].endswith("@")):
+            raise UserError(f"--options: '{item}' is not BOX_FORMAT:TRI_TEST[@TRI_FORMAT][:NODE_FORMAT[:PRIM_FORMAT]] "
+                            "(e.g. fp32:mt, bf16:watertight:q8, fp32:mt:full:packed, fp32:mt@fp64)")
         out.append((parts[0], parts[1], parts[2] if len(parts) > 2 else "full", parts[3] if len(parts) > 3 else "slot64"))
     if not out:
         raise UserError("--options is empty; give e.g. 'fp32:mt bf16:watertight'")
@@ -75,7 +78,8 @@ def main(argv=None):
     ap.add_argument("--out", required=True)
     ap.add_argument("--java", required=True, help="the java command line (classpath included)")
     ap.add_argument("--knobs", default="", help="platform flags for every command (TUS, NODE_CACHE, CONFIG, ...)")
-    ap.add_argument("--options", default=" ".join(DEFAULT_OPTIONS), help="BOX_FORMAT:TRI_TEST list")
+    ap.add_argument("--options", default=" ".join(DEFAULT_OPTIONS),
+                    help="BOX_FORMAT:TRI_TEST[@TRI_FORMAT][:NODE_FORMAT[:PRIM_FORMAT]] list, e.g. 'fp32:mt fp32:mt@fp64 bf16:watertight:q8'")
     ap.add_argument("--exhaustive", type=int, default=1000, help="rays checked against every triangle (lost hits)")
     ap.add_argument("--rtl", type=int, default=1, help="1: RTL rays/s per option (make simulate)")
     ap.add_argument("--area", choices=("none", "yosys"), default="none", help="yosys: synthesize the IU per option")
@@ -97,7 +101,9 @@ def main(argv=None):
     try:
         for i, (box, tri, node, prim) in enumerate(opts):
             name = name_of(box, tri, node, prim)
-            numerics = ["--box-format", box, "--tri-test", tri, "--node-format", node, "--prim-format", prim]
+            test, _, tri_format = tri.partition("@")
+            tri_format = tri_format or "fp32"
+            numerics = ["--box-format", box, "--tri-test", test, "--tri-format", tri_format, "--node-format", node, "--prim-format", prim]
             built = True  # the RTL builds every option (docs/numerics.md); a format it did not would say so in "note"
             d = os.path.join(a.out, name.replace(":", "-"))
             print(f"[precision] {i + 1}/{len(opts)} {name}: trace", flush=True)
@@ -110,7 +116,7 @@ def main(argv=None):
             hits_of[name] = hits
             res = classify(tris, rays, golden, hits)
             n = max(1, t["rays"])
-            row = {"option": name, "box_format": box, "tri_test": tri, "node_format": node, "prim_format": prim, "rays": t["rays"], "agree": res["agree"],
+            row = {"option": name, "box_format": box, "tri_test": test, "tri_format": tri_format, "node_format": node, "prim_format": prim, "rays": t["rays"], "agree": res["agree"],
                    "classified": sum(res["classified"].values()), "unexplained": res["unexplained"],
                    "max_rel_t_err": res["max_rel_t_err"], "exhaustive_rays": t.get("exhaustive_rays", 0),
                    "lost_hits": t.get("lost_hits", ""), "node_fetches_per_ray": t["node_fetches"] / n,

@@ -66,7 +66,12 @@ def test_precision_table_on_the_hairball(tmp_path, capsys):
     assert (out / "precision.png").stat().st_size > 0
 
 
-@pytest.mark.parametrize("bad", ["fp32", "fp32:xx", ":mt", "", "fp32:mt:", "a:mt:q8:slot64:x"])
+def test_a_triangle_format_rides_on_the_triangle_test():
+    assert precision.parse_options("fp32:mt@fp64 bf16:mt:q8") == [("fp32", "mt@fp64", "full", "slot64"), ("bf16", "mt", "q8", "slot64")]
+    assert precision.name_of("fp32", "mt@e8m31", "full", "slot64") == "fp32:mt@e8m31"
+
+
+@pytest.mark.parametrize("bad", ["fp32", "fp32:xx", ":mt", "", "fp32:mt:", "a:mt:q8:slot64:x", "fp32:mt@", "fp32:xx@fp64"])
 def test_bad_options_are_refused_with_the_format(bad):
     with pytest.raises(UserError, match="BOX_FORMAT:TRI_TEST|empty"):
         precision.parse_options(bad)

@@ -99,6 +99,8 @@ object CostModel {
     def predict(p: PlatformParams, fam: String): Seq[(String, Map[String, Double], Long)] = {
       if (p.boxFormat != rtaccel.fp.FpFormat.fp32)
         throw new InputError(s"the cost model is calibrated on fp32 boxes only; BOX_FORMAT=${p.boxFormat.name} needs FIDELITY=yosys")
+      if (p.triFormat != rtaccel.fp.FpFormat.fp32)
+        throw new InputError(s"the cost model is calibrated on the fp32 triangle pipe only; TRI_FORMAT=${p.triFormat.name} needs FIDELITY=yosys")
       if (p.triTest != rtaccel.config.TriTest.Mt)
         throw new InputError(s"the cost model is calibrated on the Möller–Trumbore pipe only; TRI_TEST=${p.triTest.name} needs FIDELITY=yosys")
       val scale = familyScale.getOrElse(fam, throw new InputError(

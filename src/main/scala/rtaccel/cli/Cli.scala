@@ -36,7 +36,6 @@ object Cli {
     * below what the scene needs: rays that need more are flagged overflow (see Cli.build).
     */
   def params(a: Args): PlatformParams = {
-    a.opt("tri-format").foreach(Numerics.checkTriFormat)
     val cfg = a.get("config", "fit")
     val preset = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
     // BOARD= brings its memory bandwidth and clock; MEM_GBPS= / CLOCK_MHZ= override either
@@ -53,6 +52,7 @@ object Cli {
       boxFormat = a.opt("box-format").map(v => BoxRange.fitRequest(v).fold(rtaccel.fp.FpFormat.parse(v))(rtaccel.fp.FpFormat(8, _)))
         .getOrElse(base.boxFormat),
       triTest = a.opt("tri-test").map(TriTest.parse).getOrElse(base.triTest),
+      triFormat = a.opt("tri-format").map(Numerics.parseTriFormat).getOrElse(base.triFormat),
       // fit: the narrowest quantization the scene needs, chosen in build()
       nodeQuantBits = a.opt("node-format").filter(_ != "fit").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
       primPacked = a.opt("prim-format").map(Numerics.parsePrimFormat).getOrElse(base.primPacked),

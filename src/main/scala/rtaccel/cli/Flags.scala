@@ -23,7 +23,7 @@ object Flags {
     f("short-stack", "ring of that many entries with restart instead of the full stack (SHORT_STACK=)"),
     f("box-format", "arithmetic of the ray-box test: fp32 | fp24 | bf16 | fp16 | e<E>m<M> | m<M> (BOX_FORMAT=; narrower ones round outward; m<M> fits the exponent to the scene)"),
     f("tri-test", "ray-triangle test: mt (Moller-Trumbore, the paper's) | watertight (Woop et al. 2013) (TRI_TEST=)"),
-    f("tri-format", "arithmetic of the triangle test: fp32 (TRI_FORMAT=)"),
+    f("tri-format", "arithmetic of Moller-Trumbore: fp32 | fp64 | e<E>m<M> with E >= 8, M >= 23 (TRI_FORMAT=; wider ones round t, u, v to fp32 at the end)"),
     f("node-format", "node layout: full (6 fp32 planes per child), q<bits> (quantized planes, docs/numerics.md) or fit (the narrowest the scene needs) (NODE_FORMAT=)"),
     f("prim-format", "primitive layout: slot64 (9 fp32 + id in 64 B) or packed (40 B records back to back, a beat-aligned row per leaf) (PRIM_FORMAT=)"),
     f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"),

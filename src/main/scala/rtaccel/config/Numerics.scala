@@ -19,8 +19,7 @@ object TriTest {
 }
 
 /** The numeric formats of a configuration, as every JSON last line names them under "numerics".
-  * Box format and triangle test are knobs; the node and primitive layouts and the triangle arithmetic are the
-  * only ones this version builds, and a request for another is refused here, naming what exists (a value that
+  * Each is a knob, and a value the RTL does not build is refused here, naming what exists (a value that
   * silently meant the default would make a precision study measure nothing).
   */
 object Numerics {
@@ -51,16 +50,22 @@ object Numerics {
     */
   val primFormats: Seq[String] = Seq("slot64", "packed")
   val packedPrimBytes: Int = 40
-  /** TRI_FORMAT: the triangle arithmetic. */
-  val triFormats: Seq[rtaccel.fp.FpFormat] = Seq(rtaccel.fp.FpFormat.fp32)
-
-  private def only(knob: String, v: String, built: Seq[String]): Unit =
-    if (!built.contains(v.toLowerCase))
-      throw new InputError(s"$knob=$v is not built in this version; it supports $knob=${built.mkString(" | ")}")
-
-  def checkTriFormat(v: String): Unit = only("TRI_FORMAT", v, triFormats.map(_.name))
+  /** TRI_FORMAT: the arithmetic of the Möller–Trumbore test (iu.TriPipe, model.RayTriangleWide): fp32 (the paper's), or
+    * any wider format (at least 8 exponent and 23 fraction bits, up to fp64): the fp32 inputs are widened exactly,
+    * every operation rounds in that format, and t, u, v are rounded to fp32 at the end (docs/numerics.md, "Wider
+    * triangle arithmetic"). A narrower one is refused: it would lose hits, not make the test more robust.
+    */
+  def parseTriFormat(v: String): rtaccel.fp.FpFormat = {
+    val f = try rtaccel.fp.FpFormat.parse(v) catch {
+      case e: IllegalArgumentException => throw new InputError(s"TRI_FORMAT=$v: ${e.getMessage.stripPrefix("requirement failed: ")}; use fp32, fp64 or e<E>m<M> with E >= 8, M >= 23")
+    }
+    if (!f.holds(rtaccel.fp.FpFormat.fp32))
+      throw new InputError(s"TRI_FORMAT=$v (e${f.expBits}m${f.manBits}) is narrower than fp32: narrower triangle arithmetic " +
+        "is not conservative (it loses hits); use fp32, fp64 or e<E>m<M> with E >= 8 and M >= 23 (e.g. e8m31)")
+    f
+  }
 
   def json(p: PlatformParams): ujson.Obj = ujson.Obj(
     "box_format" -> p.boxFormat.name, "node_format" -> nodeFormatName(p.nodeQuantBits), "prim_format" -> (if (p.primPacked) "packed" else "slot64"),
-    "tri_test" -> p.triTest.name, "tri_format" -> triFormats.head.name)
+    "tri_test" -> p.triTest.name, "tri_format" -> p.triFormat.name)
 }

@@ -86,8 +86,13 @@ final case class PlatformParams(
   boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // arithmetic of the slab test; narrower ones round outward
   triTest: TriTest = TriTest.Mt, // the ray-triangle test (Numerics: the formats every JSON line names)
   nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (bvh.Quantize, bvh.QNodeLayout)
-  primPacked: Boolean = false // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (docs/numerics.md)
+  primPacked: Boolean = false, // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (docs/numerics.md)
+  triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32 // TRI_FORMAT: Möller–Trumbore's arithmetic, fp32 or wider (Numerics)
 ) {
+  require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
+    s"TRI_FORMAT=${triFormat.name} is narrower than fp32; use fp32, fp64 or e<E>m<M> with E >= 8 and M >= 23")
+  require(triFormat == rtaccel.fp.FpFormat.fp32 || triTest == TriTest.Mt,
+    s"TRI_FORMAT=${triFormat.name} widens Möller–Trumbore only; TRI_TEST=watertight takes TRI_FORMAT=fp32 (its edge signs are exact already)")
   require(nodeQuantBits == 0 || (nodeQuantBits >= 2 && nodeQuantBits <= 16),
     s"NODE_FORMAT=q$nodeQuantBits: a quantized plane takes 2..16 bits (the 16-bit field of the node layout)")
   require(rtaccel.fp.FpFormat.fp32.holds(boxFormat),

@@ -202,6 +202,29 @@ object Fp {
   /** x of format f in format fo, rounded to nearest even (exact when fo holds it). */
   def convertNearest(f: FpFormat, fo: FpFormat, x: UInt): UInt = convertCore(f, fo, x, None)
 
+  /** x of format f in a format fo that holds it: exact, so no rounding logic. With f's exponent width the fields are
+    * padded (a subnormal stays subnormal); with a wider exponent a subnormal of f is normalised (a leading-zero
+    * count and a shift), which needs fo's bias to exceed f's by f.manBits. NaN becomes fo's canonical NaN (as
+    * every other operator's); an identity for fo == f.
+    */
+  def widen(f: FpFormat, fo: FpFormat, x: UInt): UInt = if (fo == f) x else {
+    require(fo.holds(f), s"${fo.name} does not hold ${f.name}: widen needs a wider format")
+    require(fo.expBits == f.expBits || fo.bias - f.bias >= f.manBits, s"${fo.name}'s exponent cannot hold ${f.name}'s subnormals as normals")
+    val u = new Unpacked(f, x)
+    val pad = fo.manBits - f.manBits
+    val plain = if (fo.expBits == f.expBits) Cat(u.sign, u.expF, u.frac, 0.U(pad.W))
+      else {
+        val lz = lzc(u.frac) // frac != 0 for a subnormal: its leading 1 becomes the hidden bit
+        val subFrac = shlTrunc(Cat(u.frac, 0.U(1.W)), lz)(f.manBits - 1, 0) // the bits below the leading 1
+        val subExp = (fo.bias - f.bias).U(fo.expBits.W) - lz
+        val normExp = u.expF.pad(fo.expBits) + (fo.bias - f.bias).U(fo.expBits.W)
+        val special = Cat(u.sign, Fill(fo.expBits, 1.U(1.W)), 0.U(fo.manBits.W)) // inf (NaN below)
+        Mux(u.isZero, packZero(fo, u.sign), Mux(u.expOnes, special,
+          Mux(u.expZero, Cat(u.sign, subExp, subFrac, 0.U(pad.W)), Cat(u.sign, normExp, u.frac, 0.U(pad.W)))))
+      }
+    Mux(u.isNaN, nan(fo), plain)
+  }
+
   private def convertCore(f: FpFormat, fo: FpFormat, x: UInt, toPos: Option[Bool]): UInt = {
     val u = new Unpacked(f, x)
     val ew = expW(f) max expW(fo)

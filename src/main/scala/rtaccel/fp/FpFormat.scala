@@ -19,11 +19,13 @@ final case class FpFormat(expBits: Int = 8, manBits: Int = 23) {
 
 object FpFormat {
   val fp32: FpFormat = FpFormat(8, 23)
-  /** binary64: holds the product of two fp32 values exactly (the watertight test's zero fallback); not a box format. */
+  /** binary64: holds the product of two fp32 values exactly (the watertight test's zero fallback); TRI_FORMAT=fp64;
+    * not a box format.
+    */
   val fp64: FpFormat = FpFormat(11, 52)
-  val named: Seq[(String, FpFormat)] = Seq("fp32" -> fp32, "fp24" -> FpFormat(8, 15), "bf16" -> FpFormat(8, 7), "fp16" -> FpFormat(5, 10))
+  val named: Seq[(String, FpFormat)] = Seq("fp32" -> fp32, "fp64" -> fp64, "fp24" -> FpFormat(8, 15), "bf16" -> FpFormat(8, 7), "fp16" -> FpFormat(5, 10))
   private val Em = """e(\d+)m(\d+)""".r
-  /** fp32 | fp24 | bf16 | fp16 | e<E>m<M>; IllegalArgumentException with the accepted names otherwise. */
+  /** fp32 | fp64 | fp24 | bf16 | fp16 | e<E>m<M>; IllegalArgumentException with the accepted names otherwise. */
   def parse(s: String): FpFormat = named.toMap.get(s.toLowerCase).getOrElse(s.toLowerCase match {
     case Em(e, m) => FpFormat(e.toInt, m.toInt)
     case _ => throw new IllegalArgumentException(s"format '$s' is not one of ${named.map(_._1).mkString(", ")} or e<E>m<M> (e.g. e8m10)")

@@ -21,30 +21,36 @@ class TriJob(p: PlatformParams) extends Bundle {
   *   5: first sums of the four dot products        6: det, u', v', t'
   *   7..: inv = 1/det (pipelined divider)          then u = u'*inv, v = v'*inv, t = t'*inv
   *   last: u+v and the hit conditions.
+  * TRI_FORMAT (p.triFormat, fp32 or wider): the fp32 inputs (o, d, vertices, tmin, tmax) are widened exactly where
+  * they are used, every operation above rounds in that format (model.RayTriangleWide), the hit conditions compare
+  * in it, and t, u, v are rounded to fp32 (nearest even) for the result in the last stage, beside the conditions:
+  * the same stages and latency in every format; with fp32 the widening and rounding are wires.
   */
 class TriPipe(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
     val in = Flipped(Valid(new TriJob(p)))
     val out = Valid(new TriResult(p))
   })
-  private val f = FpFormat.fp32
-  private val one = "h3f800000".U(32.W)
-  private val zero = 0.U(32.W)
+  private val f = p.triFormat
+  private val one = (BigInt(f.bias) << f.manBits).U(f.width.W)
+  private val zero = 0.U(f.width.W)
+  private def wide(x: UInt) = Fp.widen(FpFormat.fp32, f, x)
+  private def narrow(x: UInt) = if (f == FpFormat.fp32) x else Fp.convertNearest(f, FpFormat.fp32, x)
   private def sub(a: UInt, b: UInt) = Fp.sub(f, a, b)
   private def mul(a: UInt, b: UInt) = Fp.mul(f, a, b)
   private def add(a: UInt, b: UInt) = Fp.add(f, a, b)
 
   // stage 1
   val in = io.in.bits
-  def vtx(v: Int, a: Int) = in.words(3 * v + a)
+  def vtx(v: Int, a: Int) = wide(in.words(3 * v + a))
   val s1 = RegNext(VecInit((0 until 3).map(a => sub(vtx(1, a), vtx(0, a))) ++ (0 until 3).map(a => sub(vtx(2, a), vtx(0, a))) ++
-    (0 until 3).map(a => sub(in.ray.o(a), vtx(0, a)))))
+    (0 until 3).map(a => sub(wide(in.ray.o(a)), vtx(0, a)))))
   val j1 = RegNext(in); val v1 = RegNext(io.in.valid, false.B)
   def e1(a: Int) = s1(a); def e2(a: Int) = s1(3 + a); def s(a: Int) = s1(6 + a)
   // stage 2: cross products as a.i*b.j - a.j*b.i, products first
   private def crossProducts(a: Int => UInt, b: Int => UInt) =
     Seq(mul(a(1), b(2)), mul(a(2), b(1)), mul(a(2), b(0)), mul(a(0), b(2)), mul(a(0), b(1)), mul(a(1), b(0)))
-  val d1 = (k: Int) => j1.ray.d(k)
+  val d1 = (k: Int) => wide(j1.ray.d(k))
   val s2 = RegNext(VecInit(crossProducts(d1, e2) ++ crossProducts(s, e1)))
   val e2r = RegNext(VecInit((0 until 6).map(s1(_)))) // e1, e2 carried
   val sr = RegNext(VecInit((0 until 3).map(s(_))))
@@ -57,7 +63,7 @@ class TriPipe(p: PlatformParams) extends Module {
   // stage 4: products of the four dot products e1.p, s.p, d.q, e2.q
   val s4 = RegNext(VecInit(
     (0 until 3).map(a => mul(e3(a), pp(a))) ++ (0 until 3).map(a => mul(sr3(a), pp(a))) ++
-      (0 until 3).map(a => mul(j3.ray.d(a), qq(a))) ++ (0 until 3).map(a => mul(e3(3 + a), qq(a)))))
+      (0 until 3).map(a => mul(wide(j3.ray.d(a)), qq(a))) ++ (0 until 3).map(a => mul(e3(3 + a), qq(a)))))
   val j4 = RegNext(j3); val v4 = RegNext(v3, false.B)
   // stage 5: (p0 + p1)
   val s5 = RegNext(VecInit((0 until 4).map(k => add(s4(3 * k), s4(3 * k + 1)))))
@@ -83,8 +89,8 @@ class TriPipe(p: PlatformParams) extends Module {
   val res = Wire(new TriResult(p))
   res.tu := j8.tu
   res.hit := !Fp.eq(f, det8, zero) && Fp.ge(f, u, zero) && Fp.ge(f, v, zero) && Fp.le(f, add(u, v), one) &&
-    Fp.ge(f, t, j8.ray.tmin) && Fp.lt(f, t, j8.tmax) && !j8.err
-  res.t := t; res.u := u; res.v := v
+    Fp.ge(f, t, wide(j8.ray.tmin)) && Fp.lt(f, t, wide(j8.tmax)) && !j8.err
+  res.t := narrow(t); res.u := narrow(u); res.v := narrow(v)
   res.prim := j8.words(9)
   res.last := j8.last
   res.err := j8.err

@@ -14,13 +14,15 @@ object Exhaustive {
   def closest(p: PlatformParams, scene: Scene, rays: Rays, i: Int): Float = {
     val r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
     val wt = if (p.triTest == TriTest.Watertight) new RayTriangleWatertight else null
+    val wide = if (p.triFormat == rtaccel.fp.FpFormat.fp32) null else new RayTriangleWide(p.triFormat)
     val out = new RayTriangle.Result
     var best = r.tmax; var found = false
     var k = 0
     while (k < scene.triangles) {
       val base = 9 * k
       val c: Int => Float = j => scene.coords(base + j)
-      if (if (wt == null) RayTriangle.test(r, best, c, out) else wt.test(r, best, c, out)) { best = out.t; found = true }
+      if (if (wide != null) wide.test(r, best, c, out) && out.t < best // the TU's fp32 check, as Traversal
+          else if (wt == null) RayTriangle.test(r, best, c, out) else wt.test(r, best, c, out)) { best = out.t; found = true }
       k += 1
     }
     if (found) best else Float.PositiveInfinity

@@ -62,6 +62,8 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private[this] var hitPrim = -1; private[this] var hitU = 0f; private[this] var hitV = 0f; private[this] var primError = false
   // TRI_TEST=watertight: the sheared-edge test (null: Möller–Trumbore)
   private[this] val watertight = if (p.triTest == rtaccel.config.TriTest.Watertight) new RayTriangleWatertight else null
+  // TRI_FORMAT wider than fp32: Möller–Trumbore in that format (null: the fp32 test)
+  private[this] val wide = if (p.triFormat == rtaccel.fp.FpFormat.fp32) null else new RayTriangleWide(p.triFormat)
 
   def traceAll(rays: Rays, sink: AccessSink = AccessSink.none, stats: RayStats = new RayStats): Hits = {
     val h = Hits.empty(rays.count)
@@ -200,7 +202,9 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     while (k < n) {
       val w = first * firstWords + k * recordWords // v0, v1, v2 as float bits, then the scene triangle id (MemoryImage)
       if (faulty && faults.recordBad(4L * w, img.recordBytes)) primError = true
-      else if (if (watertight == null) RayTriangle.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)),
+      else if (if (wide != null) wide.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)),
+            f(prims(w + 4)), f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri) && tri.t < tmax // the TU's fp32 check
+          else if (watertight == null) RayTriangle.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)),
             f(prims(w + 4)), f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)
           else watertight.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)), f(prims(w + 4)),
             f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)) {

@@ -26,7 +26,7 @@ object RegMap {
 
   /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
   val VersionMajor = 2
-  val VersionMinor = 1
+  val VersionMinor = 2
   val Magic: Long = 0x52544143L // "RTAC"
 
   val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
@@ -42,13 +42,15 @@ object RegMap {
     Field("WAYS", 8, 8, "ways"), Field("POLICY", 16, 4, "0 dm, 1 lru, 2 plru, 3 lrp, 4 bf, 5 hybrid")))
   val PrimCache = Reg("PRIM_CACHE", 0x014, RO, "primitive cache geometry (fields as NODE_CACHE)", NodeCache.fields)
   val Formats = Reg("FORMATS", 0x018, RO, "arithmetic and memory formats", Seq(
-    Field("BOX_FP", 0, 4, "0 = fp32, 1 = the narrower format of BOX_EXP_BITS / BOX_MAN_BITS, rounded outward"), Field("TRI_FP", 4, 4, "0 = fp32"), Field("NODE_BYTES_LOG2", 8, 4, "bytes per node slot"),
+    Field("BOX_FP", 0, 4, "0 = fp32, 1 = the narrower format of BOX_EXP_BITS / BOX_MAN_BITS, rounded outward"), Field("TRI_FP", 4, 4, "0 = fp32, 1 = the wider format of FORMATS2.TRI_EXP_BITS / TRI_MAN_BITS (TRI_FORMAT)"), Field("NODE_BYTES_LOG2", 8, 4, "bytes per node slot"),
     Field("PRIM_BYTES_LOG2", 12, 4, "bytes per primitive slot"), Field("AXI_DATA_BYTES_LOG2", 16, 4, "memory bus beat"),
     Field("BOX_EXP_BITS", 20, 4, "exponent bits of the box test's format"), Field("BOX_MAN_BITS", 24, 5, "fraction bits of the box test's format"),
     Field("TRI_TEST", 29, 2, "0 = Möller–Trumbore, 1 = watertight (Woop et al. 2013)"),
     Field("PRIM_PACKED", 31, 1, "1 = PRIM_FORMAT=packed: 40 B records back to back, a leaf per row of ceil(MPPL x 40 / beat) beats (PRIM_BYTES_LOG2 does not apply)")))
-  val Formats2 = Reg("FORMATS2", 0x01C, RO, "memory layouts (FORMATS has no room left)", Seq(
-    Field("NODE_QUANT_BITS", 0, 5, "0 = full fp32 nodes, k = NODE_FORMAT=q<k> quantized nodes (docs/numerics.md)")))
+  val Formats2 = Reg("FORMATS2", 0x01C, RO, "memory layouts and the triangle format (FORMATS has no room left)", Seq(
+    Field("NODE_QUANT_BITS", 0, 5, "0 = full fp32 nodes, k = NODE_FORMAT=q<k> quantized nodes (docs/numerics.md)"),
+    Field("TRI_EXP_BITS", 8, 4, "exponent bits of Möller–Trumbore's format (8 for fp32)"),
+    Field("TRI_MAN_BITS", 12, 6, "fraction bits of Möller–Trumbore's format (23 for fp32)")))
   val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
     Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,
       "end the batch and clear status, interrupts and every counter (use only while STATUS.BUSY = 0)"),

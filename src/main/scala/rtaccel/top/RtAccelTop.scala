@@ -44,10 +44,11 @@ object RtAccelTop {
         "NODE_ID_BITS" -> p.refs.nodeIdBits),
       NodeCache -> cache(NodeCache, p.nodeCache), PrimCache -> cache(PrimCache, p.primCache),
       Formats -> word(Formats, "NODE_BYTES_LOG2" -> log2Ceil(p.nodeSlotBytes), "PRIM_BYTES_LOG2" -> log2Ceil(p.primStrideBytes),
-        "AXI_DATA_BYTES_LOG2" -> log2Ceil(p.axiDataBits / 8), "BOX_FP" -> (if (p.boxFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L),
+        "AXI_DATA_BYTES_LOG2" -> log2Ceil(p.axiDataBits / 8), "TRI_FP" -> (if (p.triFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L), "BOX_FP" -> (if (p.boxFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L),
         "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
         "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
-      Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong))
+      Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
+        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong))
   }
 }
 

@@ -104,6 +104,8 @@ class CostModelSpec extends AnyFunSuite {
     assert(c3 == 2 && e3.contains("UNIT= needs FIDELITY=yosys"), e3)
     val (c4, o4, e4) = run(Area.main0, Flags.area, "--config", "small", "--fidelity", "model", "--box-format", "bf16", "--out", dir.resolve("c").toString)
     assert(c4 == 2 && o4.isEmpty && e4.contains("BOX_FORMAT=bf16 needs FIDELITY=yosys"), e4)
+    val (c5, o5, e5) = run(Area.main0, Flags.area, "--config", "small", "--fidelity", "model", "--tri-format", "fp64", "--out", dir.resolve("d").toString)
+    assert(c5 == 2 && o5.isEmpty && e5.contains("TRI_FORMAT=fp64 needs FIDELITY=yosys"), e5)
   }
 
   test("make max-tus (model only): the answer fits, one more does not, a bigger board holds more; none fitting is exit 3") {

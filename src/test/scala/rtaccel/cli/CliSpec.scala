@@ -44,7 +44,9 @@ class CliSpec extends AnyFunSuite {
       "odd argument list" -> Seq("--m"),
       "misspelled flag" -> Seq("--node-cahce", "64"),
       "flag of another command" -> Seq("--mem-jitter", "3"),
-      "not an integer" -> Seq("--tus", "many")
+      "not an integer" -> Seq("--tus", "many"),
+      "a triangle format narrower than fp32" -> Seq("--tri-format", "bf16"),
+      "a wider triangle format with the watertight test" -> Seq("--tri-format", "fp64", "--tri-test", "watertight")
     )) {
       val out = dir.resolve(name.replace(' ', '_'))
       val (code, stdout, err) = captured(argv(out, args))(a => Trace.main0(a))
@@ -52,6 +54,14 @@ class CliSpec extends AnyFunSuite {
       assert(err.trim.linesIterator.toSeq.length == 1 && err.startsWith("error: "), s"$name: $err")
       assert(stdout.isEmpty && !Files.exists(out), s"$name left output")
     }
+  }
+
+  test("TRI_FORMAT: a narrower format is refused naming the knob, the format and what to use; fp64 traces") {
+    val (code, _, err) = captured(argv(dir.resolve("tri16"), Seq("--tri-format", "fp16")))(a => Trace.main0(a))
+    assert(code == 2 && err.contains("TRI_FORMAT=fp16 (e5m10) is narrower than fp32") && err.contains("use fp32, fp64"), err)
+    val out = dir.resolve("tri64")
+    val (ok, stdout, _) = captured(argv(out, Seq("--tri-format", "fp64")))(a => Trace.main0(a))
+    assert(ok == 0 && ujson.read(stdout.trim.linesIterator.toSeq.last)("numerics")("tri_format").str == "fp64", stdout)
   }
 
   test("a misspelled flag names the nearest valid one; a repeated flag is refused") {

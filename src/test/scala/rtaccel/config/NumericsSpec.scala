@@ -24,7 +24,16 @@ class NumericsSpec extends AnyFunSuite {
     assert(j.obj.keys.toSet == Set("box_format", "node_format", "prim_format", "tri_test", "tri_format"))
     assert(j("box_format").str == "bf16" && j("node_format").str == "q8" && j("prim_format").str == "packed" &&
       j("tri_test").str == "watertight" && j("tri_format").str == "fp32")
-    assert(intercept[InputError](Numerics.checkTriFormat("fp64")).getMessage.contains("TRI_FORMAT=fp32"))
+    assert(Numerics.parseTriFormat("fp64") == rtaccel.fp.FpFormat.fp64 && Numerics.parseTriFormat("e8m31") == rtaccel.fp.FpFormat(8, 31))
+    for (v <- Seq("fp16", "bf16", "e8m22", "e7m40")) {
+      val e = intercept[InputError](Numerics.parseTriFormat(v)).getMessage
+      assert(e.contains(s"TRI_FORMAT=$v") && e.contains("narrower than fp32") && e.contains("fp64"), e)
+    }
+    assert(intercept[InputError](Numerics.parseTriFormat("fp128")).getMessage.contains("TRI_FORMAT=fp128"))
+    assert(intercept[InputError](Numerics.parseTriFormat("e12m60")).getMessage.contains("TRI_FORMAT=e12m60"))
+    assert(Numerics.json(PlatformParams(triFormat = rtaccel.fp.FpFormat.fp64))("tri_format").str == "fp64")
+    assert(intercept[IllegalArgumentException](PlatformParams(triFormat = rtaccel.fp.FpFormat.fp64, triTest = TriTest.Watertight))
+      .getMessage.contains("TRI_TEST=watertight takes TRI_FORMAT=fp32"))
     assert(intercept[InputError](TriTest.parse("pluecker")).getMessage.contains("mt or watertight"))
     rtaccel.cache.hw.CachePath.validate(PlatformParams(triTest = TriTest.Watertight)) // built in RTL: no refusal
   }

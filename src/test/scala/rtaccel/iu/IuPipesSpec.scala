@@ -11,7 +11,8 @@ import rtaccel.fp.FpFormat
 import rtaccel.model.{PreparedRay, RayBox, RayBoxOutward, RayTriangle}
 
 /** The IU's box and triangle pipelines against the reference model's RayBox / RayTriangle, bit for bit,
-  * one job per cycle: random jobs mixed with the edge classes of docs/numerics.md.
+  * one job per cycle: random jobs mixed with the edge classes of docs/numerics.md; TriPipe in a wider TRI_FORMAT
+  * against its SoftFloat twin (model.RayTriangleWide).
   */
 class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   private def bits(f: Float): BigInt = BigInt(java.lang.Float.floatToRawIntBits(f)) & 0xffffffffL
@@ -103,9 +104,10 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
     * watertight test) near ties that take the binary64 path.
     */
   private def triPipeTest[T <: Module](name: String, n: Int, pipe: => T, lat: Int, io: T => (Valid[TriJob], Valid[TriResult]),
-                                      model: (PreparedRay, Float, Array[Float], RayTriangle.Result) => Boolean, ties: Boolean): Unit =
+                                      model: (PreparedRay, Float, Array[Float], RayTriangle.Result) => Boolean, ties: Boolean,
+                                      wide: Boolean = false, annos: Seq[firrtl2.annotations.Annotation] = Nil): Unit =
     test(s"$name == its model on $n random and degenerate primitives, one per cycle") {
-      test(pipe).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+      test(pipe).withAnnotations(Seq(VerilatorBackendAnnotation) ++ annos) { dut =>
         val (in, outIo) = io(dut)
         val expected = scala.collection.mutable.Queue[(Boolean, Seq[BigInt], Boolean)]()
         val out = new RayTriangle.Result
@@ -121,6 +123,14 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
               case 2 => for (k <- 0 until 9) v(k) = v(k) * 1e-20f                      // underflowing products
               case 3 => for (k <- 0 until 9) v(k) = v(k) * 1e13f                       // overflowing products
               case 4 => for (k <- 0 until 3) v(k) = rf(k)                              // a vertex at the origin
+              case _ if wide => rnd.nextInt(6) match { // what a wider format changes: range, subnormals, specials
+                case 0 => for (k <- 0 until 9) v(k) = v(k) * 1e30f                      // fp32 det overflows
+                case 1 => for (k <- 0 until 9) v(k) = v(k) * 1e-30f                     // fp32 det underflows
+                case 2 => for (k <- 0 until 9) v(k) = v(k) * 1e-38f                     // subnormal coordinates
+                case 3 => v(rnd.nextInt(9)) = specials(rnd.nextInt(specials.length))
+                case 4 => v(rnd.nextInt(9)) = Float.NaN
+                case _ =>
+              }
               case _ =>
             }
             in.valid.poke(true.B); in.bits.tu.poke(2.U); pokeRay(in.bits.ray, rf)
@@ -154,4 +164,13 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   private val watertight = new rtaccel.model.RayTriangleWatertight
   triPipeTest[WatertightPipe]("watertight pipe (WatertightPipe)", 20000, new WatertightPipe(p), WatertightPipe.latency(p),
     d => (d.io.in, d.io.out), (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true)
+  // TRI_FORMAT: the pipe in a wider format against the SoftFloat twin (fp64 in make test; e8m31, the same exponent
+  // as fp32, in make regress: each is a Verilator build, compiled without C++ optimisation: the wide multipliers and
+  // divider make a large model whose -O1 build takes minutes, longer than its 20000 cycles run unoptimised)
+  for (tf <- Seq(FpFormat.fp64) ++ (if (regress) Seq(FpFormat(8, 31)) else Nil)) {
+    val pw = p.copy(triFormat = tf); val twin = new rtaccel.model.RayTriangleWide(tf)
+    triPipeTest[TriPipe](s"Möller–Trumbore pipe at TRI_FORMAT=${tf.name}", 20000, new TriPipe(pw), TriPipe.latency(pw),
+      d => (d.io.in, d.io.out), (r, tmax, v, o) => twin.testSoft(r, tmax, v(0), v(1), v(2), v(3), v(4), v(5), v(6), v(7), v(8), o),
+      ties = false, wide = true, annos = rtaccel.sim.VerilatorBuild("o0", Nil, Seq("-O0"), Some("-O0"), jobs = 1).annotations)
+  }
 }

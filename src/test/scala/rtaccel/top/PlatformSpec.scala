@@ -38,11 +38,11 @@ class PlatformSpec extends AnyFunSuite {
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
-                     packed: Boolean = false, nodeQuant: Int = 0) = {
+                     packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
-      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant)
+      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick)))
@@ -131,6 +131,17 @@ class PlatformSpec extends AnyFunSuite {
     info(s"$agree of ${rays.count} rays hit the same primitive as with fp32 boxes")
   }
 
+  // TRI_FORMAT=fp64: the widened TriPipe in the IU and the TU's fp32 check of its rounded t equal the model's
+  // traversal (RayTriangleWide); make regress only (a whole platform with the wide pipe is a long build)
+  if (sys.env.get("RTACCEL_REGRESS").contains("full"))
+    test("TRI_FORMAT=fp64 at 4 TUs with a DM node cache: bit-exact against the model") {
+      val w = runOne(4, 4, 4, rays, scene, node = CacheParams(64, 1, CachePolicy.Dm), triFormat = rtaccel.fp.FpFormat.fp64)
+      assert(w.json("numerics")("tri_format").str == "fp64")
+      val (fp, _) = modelRun(Presets.paper2017.copy(tus = 4))
+      val agree = (0 until rays.count).count(i => w.hits.prim(i) == fp.prim(i))
+      info(s"$agree of ${rays.count} rays hit the same primitive as with fp32 triangle arithmetic")
+    }
+
   // TRI_TEST=watertight: the watertight pipe and the box slack in the IU equal the model's traversal; the slack
   // can only add work. make regress: 8 TUs and 1 TU with other caches (make test: the all-formats case below).
   private val watertightCases = if (!full) Nil else
@@ -152,7 +163,7 @@ class PlatformSpec extends AnyFunSuite {
   private val packedCases =
     (if (full) Seq(("8 TUs, DM node cache + 2-way LRU primitive cache, jitter + backpressure", 8, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 29, 30, 0.0),
       ("1 TU, no cache", 1, 4, CacheParams(), CacheParams(), 0, 0, 0.0),
-      ("1 TU, DM node + DM primitive caches, MPPL 3", 1, 3, CacheParams(64, 1, CachePolicy.Dm), CacheParams(48, 1, CachePolicy.Dm), 0, 0, 0.0),
+      ("1 TU, DM node + DM primitive caches, MPPL 3", 1, 3, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0, 0.0),
       ("4 TUs, MPPL 16, 4-way PLRU primitive cache", 4, 16, CacheParams(), CacheParams(128, 4, CachePolicy.Plru), 17, 0, 0.0),
       ("4 TUs, memory read errors, 2-way LRU primitive cache", 4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 2, CachePolicy.Lru), 13, 0, 0.003))
     else Nil)

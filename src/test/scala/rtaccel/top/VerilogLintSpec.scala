@@ -24,7 +24,8 @@ class VerilogLintSpec extends AnyFunSuite {
       ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
       ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight"),
       ("paper2017", 4, 2, "--prim-format packed --prim-cache 64 --prim-ways 2"),
-      ("small", 4, 2, "--node-format q8 --node-cache 64")))
+      ("small", 4, 2, "--node-format q8 --node-cache 64"),
+      ("small", 4, 2, "--tri-format fp64"))) // the widened Möller–Trumbore pipe: a large circuit to lint
   for ((cfg, m, tus, caches) <- cases)
     test(s"$cfg with M=$m, TUs=$tus${if (caches.isEmpty) "" else s", caches $caches"} emits SystemVerilog that is lint clean") {
       val out = Files.createTempDirectory(s"lint-$cfg")
