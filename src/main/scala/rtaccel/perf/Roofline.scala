@@ -23,13 +23,18 @@ object Roofline {
   def resources(p: PlatformParams): Resources = Resources(ius = 1, memChannels = 1)
 
   /** What one IU does per cycle, from the RTL's geometry (IntersectionUnit: one beat per cycle). */
-  final case class IuRates(nodeBeats: Int, primBeats: Int) {
+  final case class IuRates(nodeBeats: Int, primBeats: Double) {
     def nodesPerCycle: Double = 1.0 / nodeBeats
     def primsPerCycle: Double = 1.0 / primBeats
   }
   def iuRates(p: PlatformParams): IuRates = {
     val g = McGeometry(p, AxiParams.of(p))
-    IuRates(g.nodeBeats, g.primBeats)
+    // PRIM_FORMAT=packed: the LeafAssembler cuts one 40 B record per cycle out of the beats, so a primitive costs
+    // its share of beats but at least a cycle; the padding of a leaf's last beat is left out, which keeps the
+    // bound a ceiling (the RTL can only be slower)
+    val prim = if (p.primPacked) math.max(1.0, rtaccel.config.Numerics.packedPrimBytes.toDouble / AxiParams.of(p).beatBytes)
+      else g.primBeats.toDouble
+    IuRates(g.nodeBeats, prim)
   }
 
   /** A run reaches a roof when it achieves at least this share of it; below, neither roof binds: the requests

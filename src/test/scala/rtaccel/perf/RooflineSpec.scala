@@ -15,6 +15,11 @@ class RooflineSpec extends AnyFunSuite {
     assert(Roofline.iuRates(p.copy(m = 8)) == Roofline.IuRates(8, 2))
     assert(Roofline.iuRates(p.copy(m = 2)) == Roofline.IuRates(2, 2))
     assert(Roofline.iuRates(p.copy(axiDataBits = 512)) == Roofline.IuRates(2, 1))
+    // packed leaves: 40 B records through the LeafAssembler, one per cycle at most; quantized nodes: their slot's beats
+    assert(Roofline.iuRates(p.copy(primPacked = true)) == Roofline.IuRates(4, 1.25))
+    assert(Roofline.iuRates(p.copy(primPacked = true, axiDataBits = 512)) == Roofline.IuRates(2, 1.0))
+    assert(Roofline.iuRates(p.copy(primPacked = true, axiDataBits = 64)) == Roofline.IuRates(16, 5.0))
+    assert(Roofline.iuRates(p.copy(nodeQuantBits = 8)) == Roofline.IuRates(2, 2))
     assert(Roofline.iuRates(p).nodesPerCycle == 0.25 && Roofline.iuRates(p).primsPerCycle == 0.5)
   }
 
