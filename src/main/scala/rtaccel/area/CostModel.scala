@@ -103,6 +103,11 @@ object CostModel {
         throw new InputError(s"the cost model is calibrated on the fp32 triangle pipe only; TRI_FORMAT=${p.triFormat.name} needs FIDELITY=yosys")
       if (p.triTest != rtaccel.config.TriTest.Mt)
         throw new InputError(s"the cost model is calibrated on the Möller–Trumbore pipe only; TRI_TEST=${p.triTest.name} needs FIDELITY=yosys")
+      // the fit has no NodeDecode or LeafAssembler term: a figure without them would be invented
+      if (p.nodeQuantBits > 0)
+        throw new InputError(s"the cost model is calibrated on full nodes only (no NodeDecode); NODE_FORMAT=${rtaccel.config.Numerics.nodeFormatName(p.nodeQuantBits)} needs FIDELITY=yosys")
+      if (p.primPacked)
+        throw new InputError("the cost model is calibrated on slot64 primitives only (no LeafAssembler); PRIM_FORMAT=packed needs FIDELITY=yosys")
       val scale = familyScale.getOrElse(fam, throw new InputError(
         s"the cost model has no calibration for family '$fam' (calibrated: ${familyScale.keys.toSeq.sorted.mkString(", ")}); use FIDELITY=yosys"))
       units.map { u =>
