@@ -70,6 +70,13 @@ def _cls(res):
     return " ".join(f"{k}={v}" for k, v in res["classified"].items() if v)
 
 
+def synthesis_knobs(knobs):
+    """The platform knobs of an IU synthesis: a circuit has fixed field widths, so CONFIG=fit synthesizes its preset
+    (as make verilog does); make passes BOARD= among the knobs too, and the synthesis takes it once, from --board."""
+    out = ["paper2017" if k > 0 and knobs[k - 1] == "--config" and v == "fit" else v for k, v in enumerate(knobs)]
+    return [v for k, v in enumerate(out) if v != "--board" and not (k > 0 and out[k - 1] == "--board")]
+
+
 def main(argv=None):
     ap = ArgParser(prog="make precision", description=__doc__.splitlines()[0])
     ap.add_argument("--scene", required=True, help="scene label (the mesh path)")
@@ -141,9 +148,7 @@ def main(argv=None):
                     row["failure"] = f"RTL: {sm.get('error') or r.get('failures')}"
             if a.area == "yosys" and built:
                 print(f"[precision] {i + 1}/{len(opts)} {name}: synthesis of the IU", flush=True)
-                # a circuit has fixed field widths: CONFIG=fit synthesizes its preset, as make verilog does
-                vknobs = ["paper2017" if k > 0 and knobs[k - 1] == "--config" and v == "fit" else v for k, v in enumerate(knobs)]
-                ar = ask(jvm, "area", vknobs + numerics + ["--unit", "IntersectionUnit", "--fidelity", "yosys",
+                ar = ask(jvm, "area", synthesis_knobs(knobs) + numerics + ["--unit", "IntersectionUnit", "--fidelity", "yosys",
                                                            "--board", a.board, "--out", d + "-area"])
                 if ar["status"] == 0:
                     tot = ar["result"]

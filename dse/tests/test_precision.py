@@ -86,3 +86,9 @@ def test_a_box_format_the_model_refuses_is_one_clear_error(tmp_path):
         precision.main(["--scene", "cornell", "--tris", str(d / "tris.npy"), "--golden", str(d / "golden"),
                         "--out", str(tmp_path / "o"), "--java", _java(), "--options", "e9m4:mt", "--rtl", "0"])
     assert not (tmp_path / "o" / "precision.csv").exists()
+
+
+def test_synthesis_knobs_take_the_board_once_and_a_preset_for_fit():
+    knobs = ["--config", "fit", "--tus", "32", "--board", "xc5vlx330t", "--node-cache", "8192"]
+    assert precision.synthesis_knobs(knobs) == ["--config", "paper2017", "--tus", "32", "--node-cache", "8192"]
+    assert precision.synthesis_knobs(["--config", "small"]) == ["--config", "small"]
