@@ -21,6 +21,9 @@ object CostModel {
 
   private def one(p: PlatformParams) = Seq("one" -> 1.0)
   private def once(p: PlatformParams) = 1L
+  /** IUS clusters each build an IU (its pipes) and an MC (its caches): those units' features are one cluster's times
+    * IUS, so that the fit (made on one cluster) scales exactly and is unchanged at IUS=1. */
+  private def perIu(p: PlatformParams, f: Seq[(String, Double)]) = f.map { case (k, v) => k -> v * p.ius }
   private def bits(n: Int) = 32 - Integer.numberOfLeadingZeros(math.max(1, n) - 1)
   private val entry = rtaccel.tu.TraversalUnit.entryBits.toDouble
 
@@ -45,18 +48,18 @@ object CostModel {
     // the TC's own logic: ray set-up (three dividers are units of their own) and the TUs' result arbiter
     CostUnit("TraversalController", "TraversalController".r, perInstance = false, p => one(p) :+ ("tus" -> p.tus.toDouble), once),
     // the IU's own logic is mostly the request arbiter over the TUs (each request carries the ray)
-    CostUnit("IntersectionUnit", "IntersectionUnit".r, perInstance = false, p => one(p) :+ ("tus" -> p.tus.toDouble), once),
-    CostUnit("BoxPipe", "BoxPipe".r, perInstance = false, p => one(p) :+ ("m" -> p.m.toDouble), once),
-    CostUnit("TriPipe", "TriPipe".r, perInstance = false, one, once),
+    CostUnit("IntersectionUnit", "IntersectionUnit".r, perInstance = false, p => perIu(p, one(p) :+ ("tus" -> p.tusPerIu.toDouble)), once),
+    CostUnit("BoxPipe", "BoxPipe".r, perInstance = false, p => perIu(p, one(p) :+ ("m" -> p.m.toDouble)), once),
+    CostUnit("TriPipe", "TriPipe".r, perInstance = false, p => perIu(p, one(p)), once),
     // 1/d per axis in the TC, 1/det in the triangle pipe
-    CostUnit("FpDivPipe", "FpDivPipe".r, perInstance = true, one, _ => (rtaccel.tc.TraversalController.dividers + rtaccel.iu.TriPipe.dividers).toLong),
-    CostUnit("MemoryController", "MemoryController".r, perInstance = false, one, once),
+    CostUnit("FpDivPipe", "FpDivPipe".r, perInstance = true, one, p => (rtaccel.tc.TraversalController.dividers + rtaccel.iu.TriPipe.dividers * p.ius).toLong),
+    CostUnit("MemoryController", "MemoryController".r, perInstance = false, p => perIu(p, one(p)), once),
     // every cache of the MC together: tags and policy state grow with lines, data RAM is block RAM
     CostUnit("CachePath", "CachePath(_[0-9]+)?".r, perInstance = false, p => {
       val cs = caches(p)
-      Seq("caches" -> cs.length.toDouble, "lines" -> cs.map(_.dataLines.toDouble).sum,
+      perIu(p, Seq("caches" -> cs.length.toDouble, "lines" -> cs.map(_.dataLines.toDouble).sum,
         "assoc_lines" -> cs.filter(g => g.c.ways > 1 || g.sideLines > 0).map(_.dataLines.toDouble).sum,
-        "data_bram36" -> cacheDataBram(p))
+        "data_bram36" -> cacheDataBram(p)))
     }, once),
     CostUnit("RegFile", "RegFile".r, perInstance = false, one, once),
     CostUnit("PerfCounters", "PerfCounters".r, perInstance = false, one, once),

@@ -111,8 +111,12 @@ object Throughput {
     // a lone hit: the path's overhead (every access of a cached path pays it) and its beats from the cache
     val hitLatency = if (hits > 0) overhead / accesses + hitBytes / beatBytes / hits else 0.0
     val stream = InOrder(hits / n, (nodeMisses + leafMisses) / n, hitLatency, lat)
-    val limit = Seq(tus, p.hw.iuOutstanding, p.hw.mcOutstanding).min
-    val (x, hol) = mvaInOrder(delay, dram, beats, stream, limit)
-    Prediction(latency, dram, beats, x, mva(delay, Seq(dram, beats), tus), hol, limit)
+    // IUS clusters: each is the network above with TUS / IUS TUs, its own response port and a 1/IUS share of the
+    // DRAM (the clusters are alike on average); the platform does IUS times one cluster's rays
+    val k = p.ius
+    require(tus % k == 0, s"TUS=$tus does not split evenly over IUS=$k intersection units")
+    val limit = Seq(tus / k, p.hw.iuOutstanding, p.hw.mcOutstanding).min
+    val (x, hol) = mvaInOrder(delay, dram * k, beats, stream, limit)
+    Prediction(latency, dram, beats, x * k, mva(delay, Seq(dram * k, beats), tus / k) * k, hol, limit)
   }
 }

@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import rtaccel.bvh.RefCodec
-import rtaccel.cache.{CacheModel, CacheSink, Replay}
+import rtaccel.cache.{CacheModel, CacheSink, ClusterSinks, Replay}
 import rtaccel.config.{CacheParams, PlatformParams}
 
 /** The `node_cache` / `prim_cache` objects of make simulate: the RTL's counters beside the trace model fed
@@ -11,11 +11,15 @@ import rtaccel.config.{CacheParams, PlatformParams}
 object CacheReport {
   final case class Report(node: ujson.Value, prim: ujson.Value, matches: ujson.Value)
 
-  def simulate(p: PlatformParams, counters: Map[String, Long], logged: Array[Int], rows: Array[Int], codec: RefCodec): Report = {
+  def simulate(p: PlatformParams, counters: Map[String, Long], logged: Seq[Array[Int]], rows: Array[Int], codec: RefCodec): Report = {
     val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
     if (!cached) return Report(absent, absent, ujson.Null)
-    val same = CacheSink(p); Replay.refs(logged, codec, same)
-    val inter = CacheSink(p); Replay.interleaved(rows, p.tus, inter)
+    require(logged.length == p.ius, s"one access log per IU cluster: ${logged.length} logs for IUS=${p.ius}")
+    // each cluster's caches replay that cluster's own log; the RTL's counters are the clusters' sums
+    val clusters = new ClusterSinks(p)
+    for ((log, c) <- logged.zipWithIndex) { clusters.cluster = c; Replay.refs(log, codec, clusters) }
+    val same = clusters.total
+    val interC = new ClusterSinks(p); Replay.clustered(rows, p, interC); val inter = interC.total
     var ok = true
     def one(name: String, c: CacheParams, sameM: Option[CacheModel], interM: Option[CacheModel]): ujson.Value = (sameM, interM) match {
       case (Some(s), Some(i)) =>
@@ -25,7 +29,7 @@ object CacheReport {
           "hits" -> h.toDouble, "misses" -> m.toDouble, "bypasses" -> b.toDouble,
           "miss_rate" -> (if (h + m == 0) 0.0 else m.toDouble / (h + m)),
           "model_same_order" -> ujson.Obj("hits" -> s.hits.toDouble, "misses" -> s.misses.toDouble, "bypasses" -> s.bypasses.toDouble),
-          "model_interleaved" -> ujson.Obj("tus" -> p.tus, "hits" -> i.hits.toDouble, "misses" -> i.misses.toDouble,
+          "model_interleaved" -> ujson.Obj("tus" -> p.tus, "ius" -> p.ius, "hits" -> i.hits.toDouble, "misses" -> i.misses.toDouble,
             "miss_rate" -> i.missRate))
       case _ => absent
     }

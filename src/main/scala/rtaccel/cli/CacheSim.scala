@@ -41,10 +41,11 @@ object CacheSim {
     val repeat = a.int("repeat", 1)
     if (repeat < 1) throw new InputError(s"--repeat must be at least 1 (got $repeat)")
     val runs = (1 to repeat).map { _ =>
-      val sink = CacheSink(p)
+      // IUS > 1: each IU cluster's TUs share that cluster's caches (Replay.clustered); the counts are the sums
+      val sinks = new rtaccel.cache.ClusterSinks(p.copy(tus = tus))
       val t1 = System.nanoTime()
-      Replay.interleaved(rows, tus, sink)
-      (sink, (System.nanoTime() - t1) / 1e9)
+      Replay.clustered(rows, p.copy(tus = tus), sinks)
+      (sinks.total, (System.nanoTime() - t1) / 1e9)
     }
     val sink = runs.last._1
     val (nc, pc) = (sink.nodeCache, sink.primCache)
@@ -69,7 +70,7 @@ object CacheSim {
     }.minBy(_._2)
     val j = ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
-      "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
+      "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "ius" -> p.ius, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
       "node_accesses" -> sink.nodeAccesses.toDouble, "leaf_accesses" -> sink.leafAccesses.toDouble,
       "node_cache" -> stats(nc, node), "prim_cache" -> stats(pc, prim),
       "node_bytes_per_ray" -> nodeBpr, "prim_bytes_per_ray" -> primBpr, "dram_bytes_per_ray" -> (nodeBpr + primBpr),

@@ -148,7 +148,7 @@ object Simulate {
     val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
     val rayCap = SimSetup.pow2(rays.count); val wordCap = SimSetup.pow2((imageBytes + axi.beatBytes - 1) / axi.beatBytes)
     val r = p.refs
-    val key = s"tus${p.tus}-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
+    val key = s"tus${p.tus}" + (if (p.ius > 1) s"-ius${p.ius}" else "") + s"-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
       s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" + (if (o.errorThreshold > 0) s"-err${o.errorThreshold}" else "") +
       (if (p.shortStack > 0) s"-short${p.shortStack}.${p.treeLevels}" else "") +
@@ -213,12 +213,13 @@ object Simulate {
       val (rtlOverflow, rtlReadError) = (rtl.overflow, rtl.readError)
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
       // and against the model's N-TU interleaved order (the fast model's prediction)
-      val logged = if (!cached) Array.empty[Int] else {
-        val nLog = dut.io.logCount.peek().litValue.toInt
+      // one log per IU cluster, each the order its own caches saw
+      val logged = if (!cached) Seq.fill(p.ius)(Array.empty[Int]) else Seq.tabulate(p.ius) { c =>
+        val nLog = dut.io.logCount(c).peek().litValue.toInt
         if (nLog > logCap) throw new InputError(s"the RTL made $nLog accesses, more than the model's ${accessRows.length / 5}")
         val w = SimSetup.logWords; val a = new Array[Int](nLog)
         for (row <- 0 until (nLog + w - 1) / w) {
-          dut.io.readIdx.poke(row.U); val bits = dut.io.logData.peek().litValue
+          dut.io.readIdx.poke(row.U); val bits = dut.io.logData(c).peek().litValue
           for (k <- 0 until math.min(w, nLog - row * w)) a(row * w + k) = ((bits >> (32 * k)) & 0xffffffffL).toLong.toInt
         }
         a
@@ -226,7 +227,7 @@ object Simulate {
       val tLog = System.nanoTime()
       val cacheJson = CacheReport.simulate(p, counters, logged, accessRows, img.codec)
       System.err.println(f"[simulate] readout: hits ${(tHits - tEnd) / 1e9}%.1f s, access log ${(tLog - tHits) / 1e9}%.1f s " +
-        f"(${logged.length} entries), cache check ${(System.nanoTime() - tLog) / 1e9}%.1f s")
+        f"(${logged.map(_.length).sum} entries), cache check ${(System.nanoTime() - tLog) / 1e9}%.1f s")
       val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond
@@ -243,7 +244,7 @@ object Simulate {
         "sim_cycles_per_cpu_s" -> stepped / math.max(1e-9, simCpu), "sim_cpu_s" -> simCpu,
         // where the wall time went: model + inputs, simulator build (or cache load) + host setup, the run, readout and checks
         "wall_model_s" -> modelWall, "wall_build_s" -> (tSim - t0) / 1e9, "wall_readout_s" -> (System.nanoTime() - tEnd) / 1e9,
-        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "m" -> p.m, "mppl" -> p.mppl,
+        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "ius" -> p.ius, "m" -> p.m, "mppl" -> p.mppl,
         "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "model_restarts" -> stats.restarts.toDouble, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
         "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> rtlReadError.count(identity),

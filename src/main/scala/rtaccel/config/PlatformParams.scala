@@ -87,7 +87,8 @@ final case class PlatformParams(
   triTest: TriTest = TriTest.Mt, // the ray-triangle test (Numerics: the formats every JSON line names)
   nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (bvh.Quantize, bvh.QNodeLayout)
   primPacked: Boolean = false, // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (docs/numerics.md)
-  triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32 // TRI_FORMAT: Möller–Trumbore's arithmetic, fp32 or wider (Numerics)
+  triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // TRI_FORMAT: Möller–Trumbore's arithmetic, fp32 or wider (Numerics)
+  ius: Int = 1 // IUS: intersection units, each with its own MC and caches and TUS / IUS TUs (docs/architecture.md, "IU clusters")
 ) {
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
     s"TRI_FORMAT=${triFormat.name} is narrower than fp32; use fp32, fp64 or e<E>m<M> with E >= 8 and M >= 23")
@@ -100,6 +101,8 @@ final case class PlatformParams(
   require(shortStack >= 0 && shortStack <= 64, s"SHORT_STACK must be 0 (full stack) or 1..64 entries (got $shortStack)")
   require(treeLevels >= 1 && treeLevels <= 256, s"tree levels must be 1..256 (got $treeLevels)")
   require(tus >= 1 && tus <= 1024, s"TUS must be in 1..1024 (got $tus)")
+  require(ius >= 1 && ius <= 64, s"IUS must be in 1..64 (got $ius)")
+  require(tus % ius == 0, s"TUS=$tus does not split evenly over IUS=$ius intersection units; make TUS a multiple of IUS")
   require(Set(2, 4, 8)(m), s"M (MBVH width) must be 2, 4 or 8 (got $m)")
   require(mppl >= 1, s"MPPL must be at least 1 (got $mppl)")
   require(mppl <= refs.maxLeafPrims,
@@ -153,6 +156,8 @@ final case class PlatformParams(
     if (triTest != TriTest.Watertight) 0 else if (e <= 0) 1 else 1 << e
   }
   val tuBits: Int = math.max(1, 32 - Integer.numberOfLeadingZeros(tus - 1))
+  /** TUs per IU cluster: TU i belongs to cluster i / tusPerIu (its IU, MC and caches). */
+  val tusPerIu: Int = tus / ius
   val cyclesPerSecond: Double = clockMhz * 1e6
   val memBytesPerCycle: Double = memory.bytesPerSecond * memory.sustainedEfficiency / cyclesPerSecond
 }

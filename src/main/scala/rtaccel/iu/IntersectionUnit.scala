@@ -11,10 +11,10 @@ import rtaccel.mc.{FetchBeat, FetchReq}
   * at most one request outstanding and always takes its results, so the pipelines never stall).
   * Memory requests are issued ahead while earlier data is still arriving, up to `maxOutstanding`.
   */
-class IntersectionUnit(p: PlatformParams, beatBits: Int) extends Module {
+class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extends Module {
   private val maxOutstanding = p.hw.iuOutstanding
   val io = IO(new Bundle {
-    val req = Flipped(Vec(p.tus, Decoupled(new IuReq(p))))
+    val req = Flipped(Vec(requesters, Decoupled(new IuReq(p))))
     val box = Valid(new BoxResult(p))
     val tri = Valid(new TriResult(p))
     val mem = new Bundle {
@@ -29,7 +29,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int) extends Module {
   private val primFlagBit = p.refs.refBits - 1
 
   // ---- arbitration and issue: a request goes to memory and its context to the job FIFO together
-  val arb = Module(new RRArbiter(new IuReq(p), p.tus))
+  val arb = Module(new RRArbiter(new IuReq(p), requesters))
   arb.io.in <> io.req
   class Job extends Bundle {
     val tu = UInt(p.tuBits.W)

@@ -58,6 +58,15 @@ class McCounters extends Bundle {
   val primCache = new PathStats
 }
 
+object McCounters {
+  /** The field-by-field sum of several MCs' counters (IUS > 1: one MC per IU cluster); every field is 48 bits. */
+  def sum(cs: Seq[McCounters]): McCounters = if (cs.length == 1) cs.head else {
+    val k = (new McCounters).getWidth / 48
+    val vs = cs.map(_.asTypeOf(Vec(k, UInt(48.W))))
+    VecInit(Seq.tabulate(k)(i => vs.map(_(i)).reduce(_ + _))).asTypeOf(new McCounters)
+  }
+}
+
 /** Sizes shared by the MC and its paths. */
 final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   require(axi.beatBytes <= p.primStrideBytes && axi.beatBytes <= p.nodeSlotBytes,

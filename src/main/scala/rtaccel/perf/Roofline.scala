@@ -20,7 +20,7 @@ object Roofline {
   final case class Resources(ius: Int, memChannels: Int) {
     require(ius >= 1 && memChannels >= 1, s"IU count and memory channels must be >= 1 (got $ius, $memChannels)")
   }
-  def resources(p: PlatformParams): Resources = Resources(ius = 1, memChannels = 1)
+  def resources(p: PlatformParams): Resources = Resources(ius = p.ius, memChannels = 1)
 
   /** What one IU does per cycle, from the RTL's geometry (IntersectionUnit: one beat per cycle). */
   final case class IuRates(nodeBeats: Int, primBeats: Double) {

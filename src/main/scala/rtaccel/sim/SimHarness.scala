@@ -34,9 +34,9 @@ object SimSetup {
   * (backpressure). Everything else goes through the board's AXI4-Lite port, `lite`, which the host driver
   * (HostDriver) works from outside in the order docs/registers.md gives; `irq` is the board's interrupt.
   * Results are read out through `readIdx`/`readData` at the end.
-  * With accessLogCapacity > 0 every child reference the MC accepts is logged in order (`logCount`, read out
-  * through `readIdx`/`logData`, SimSetup.logWords entries per row): the access order the caches saw, for
-  * replay through the trace model.
+  * With accessLogCapacity > 0 every child reference each IU cluster's MC accepts is logged in order in that
+  * cluster's log (`logCount(c)`, read out through `readIdx`/`logData(c)`, SimSetup.logWords entries per row):
+  * the access order its caches saw, for replay through the trace model.
   */
 class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   val top = Module(new RtAccelTop(p, tapAccesses = s.accessLogCapacity > 0))
@@ -48,8 +48,9 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val sent = Output(UInt(32.W))
     val readIdx = Input(UInt(32.W))
     val readData = Output(UInt(RtAccelTop.HitBits.W))
-    val logCount = Output(UInt(32.W))
-    val logData = Output(UInt((32 * SimSetup.logWords).W)) // entries readIdx * logWords .. + logWords - 1, the first lowest
+    // per IU cluster: entries readIdx * logWords .. + logWords - 1 of its log, the first lowest
+    val logCount = Output(Vec(p.ius, UInt(32.W)))
+    val logData = Output(Vec(p.ius, UInt((32 * SimSetup.logWords).W)))
   })
   val dram = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, s.dram, p.hw.dramQueueDepth))
   dram.io.axi <> top.io.mem
@@ -78,11 +79,11 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   io.sent := sent
   io.readData := hits(io.readIdx)
 
-  val logCount = RegInit(0.U(32.W))
-  io.logCount := logCount
-  io.logData := 0.U
-  top.io.tap.foreach { t =>
+  io.logCount.foreach(_ := 0.U)
+  io.logData.foreach(_ := 0.U)
+  top.io.tap.foreach(_.zipWithIndex.foreach { case (t, c) =>
     val w = SimSetup.logWords
+    val logCount = RegInit(0.U(32.W))
     val log = Mem(s.accessLogCapacity / w, Vec(w, UInt(32.W)))
     when(t.valid) {
       when(logCount < s.accessLogCapacity.U) {
@@ -90,6 +91,7 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
       }
       logCount := logCount + 1.U
     }
-    io.logData := log(io.readIdx).asUInt
-  }
+    io.logCount(c) := logCount
+    io.logData(c) := log(io.readIdx).asUInt
+  })
 }

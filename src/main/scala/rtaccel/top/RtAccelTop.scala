@@ -5,7 +5,7 @@ import chisel3.util._
 import rtaccel.config.PlatformParams
 import rtaccel.iu.IntersectionUnit
 import rtaccel.cache.hw.CachePath
-import rtaccel.mc.{AxiParams, AxiReadMaster, McGeometry, MemoryController}
+import rtaccel.mc.{AxiParams, AxiReadMaster, AxiReadMux, McGeometry, MemoryController}
 import rtaccel.tc.TraversalController
 import rtaccel.tu.TraversalUnit
 
@@ -48,7 +48,7 @@ object RtAccelTop {
         "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
         "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
       Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
-        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong))
+        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong))
   }
 }
 
@@ -56,8 +56,9 @@ object RtAccelTop {
   * out, an AXI4 read master to onboard memory, and an AXI4-Lite slave with the register map of RegMap
   * (configuration, control, status, interrupt, counters; docs/registers.md) plus its interrupt line.
   * The node and primitive caches of p.nodeCache / p.primCache sit in the MC (none when entries = 0).
-  * tapAccesses (simulation): `tap` shows every child reference the MC accepts, so a harness can log the
-  * access order the caches saw and replay it through the trace model.
+  * IUS = p.ius clusters of TUS / IUS TUs, each with its own IU, MC and caches, share the memory port.
+  * tapAccesses (simulation): `tap(c)` shows every child reference cluster c's MC accepts, so a harness can log
+  * the access order each cluster's caches saw and replay it through the trace model.
   */
 class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module {
   val axiP = AxiParams.of(p)
@@ -67,15 +68,18 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     val mem = new AxiReadMaster(axiP)
     val lite = Flipped(new AxiLite(RegMap.addrBits(RtAccelTop.counterNames)))
     val irq = Output(Bool())
-    val tap = if (tapAccesses) Some(Output(Valid(UInt(32.W)))) else None
+    val tap = if (tapAccesses) Some(Output(Vec(p.ius, Valid(UInt(32.W))))) else None // per IU cluster
   })
   val tc = Module(new TraversalController(p))
   val tus = Seq.fill(p.tus)(Module(new TraversalUnit(p)))
-  val iu = Module(new IntersectionUnit(p, axiP.dataBits))
   private val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
-  // caches reorder DRAM traffic between the paths: give each path a response buffer (see MemoryController)
-  val mc = Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
-    respBufferBeats = if (cached) 2 * McGeometry(p, axiP).maxBeats else 0))
+  // IUS clusters: TU i belongs to cluster i / tusPerIu, which has its own IU, MC and caches; the MCs share the
+  // one memory port (AxiReadMux). A cluster's TUs answer to their index within it.
+  val ius = Seq.fill(p.ius)(Module(new IntersectionUnit(p, axiP.dataBits, p.tusPerIu)))
+  // caches reorder DRAM traffic between the paths: give each path a response buffer (see MemoryController);
+  // with several clusters the buffers also keep one cluster's R beats from waiting on another's
+  val mcs = Seq.fill(p.ius)(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
+    respBufferBeats = if (cached || p.ius > 1) 2 * McGeometry(p, axiP).maxBeats else 0)))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
   regs.io.lite <> io.lite
@@ -93,24 +97,32 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   tc.io.out.ready := io.hits.ready
 
   for ((tu, i) <- tus.zipWithIndex) {
-    tu.io.index := i.U
+    val (iu, k) = (ius(i / p.tusPerIu), i % p.tusPerIu)
+    tu.io.index := k.U
     tu.io.ray <> tc.io.tuRay(i)
     tc.io.tuResult(i) <> tu.io.result
-    iu.io.req(i) <> tu.io.req
+    iu.io.req(k) <> tu.io.req
     tu.io.box := iu.io.box
     tu.io.tri := iu.io.tri
   }
-  mc.io.req <> iu.io.mem.req
-  iu.io.mem.resp <> mc.io.resp
-  mc.io.primBase := regs.io.primBase
-  mc.io.maxLevel := regs.io.maxLevel
-  io.tap.foreach { t => t.valid := mc.io.req.fire; t.bits := mc.io.req.bits.childRef }
-  io.mem <> mc.io.axi
+  for ((iu, mc) <- ius.zip(mcs)) {
+    mc.io.req <> iu.io.mem.req
+    iu.io.mem.resp <> mc.io.resp
+    mc.io.primBase := regs.io.primBase
+    mc.io.maxLevel := regs.io.maxLevel
+    mc.io.clearCounters := regs.io.clearCounters
+  }
+  io.tap.foreach(t => for ((ti, mc) <- t.zip(mcs)) { ti.valid := mc.io.req.fire; ti.bits := mc.io.req.bits.childRef })
+  if (p.ius == 1) io.mem <> mcs.head.io.axi
+  else {
+    val mux = Module(new AxiReadMux(axiP, p.ius, p.hw.mcOutstanding))
+    for ((m, mc) <- mux.io.in.zip(mcs)) m <> mc.io.axi
+    io.mem <> mux.io.out
+  }
 
   // counters
   val perf = Module(new PerfCounters(RtAccelTop.eventNames, incBits = log2Ceil(p.tus + 1)))
   perf.io.clear := regs.io.clearCounters
-  mc.io.clearCounters := regs.io.clearCounters
   val tuBusy = tus.map(_.io.busy)
   val anyBusy = tuBusy.reduce(_ || _) || tc.io.out.valid
   regs.io.events.busy := anyBusy
@@ -125,12 +137,12 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val events = Map(
     "cycles" -> 1.U, "batch_cycles" -> ev(regs.io.running), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
     "stall_iu_arbitration" -> ev(PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready))),
-    "stall_memory_request" -> ev(mc.io.axi.ar.valid && !mc.io.axi.ar.ready),
-    "stall_memory_data" -> ev(iu.io.mem.resp.ready && !iu.io.mem.resp.valid),
+    "stall_memory_request" -> ev(io.mem.ar.valid && !io.mem.ar.ready),
+    "stall_memory_data" -> ev(PopCount(ius.map(iu => iu.io.mem.resp.ready && !iu.io.mem.resp.valid))),
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
     "tu_busy_cycles" -> ev(PopCount(tuBusy)))
   for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := events(n)
-  val mcc = mc.io.counters // in memoryNames order
+  val mcc = rtaccel.mc.McCounters.sum(mcs.map(_.io.counters)) // in memoryNames order
   regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
     mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,
     mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses, mcc.readErrors).map(_.pad(64)))

@@ -60,7 +60,7 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     assert(leafRefs.exists(codec.count(_) > 1), "the image needs leaves of several primitives")
     val rays = TestScenes.rays(seed, 512)
     var st = Stats(0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
-    test(new IntersectionUnit(p, beatBits)).withAnnotations(sim(p, beatBits)) { dut =>
+    test(new IntersectionUnit(p, beatBits, p.tus)).withAnnotations(sim(p, beatBits)) { dut =>
       dut.clock.setTimeout(0)
       var cycle = 0L
       def fail(what: String): Nothing = throw new AssertionError(s"$what (seed $seed, cycle $cycle)")

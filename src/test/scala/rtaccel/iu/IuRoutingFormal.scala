@@ -61,7 +61,7 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     val mem = Input(new MemFree(beatBits))
     val bugFire = Input(Bool())
   })
-  val dut = Module(new IntersectionUnit(p, beatBits))
+  val dut = Module(new IntersectionUnit(p, beatBits, p.tus))
   val now = FormalEnv.cycle(6)
 
   // ---- the memory side: FetchReq -> (addr, beats), decoded independently of the MC
