@@ -88,6 +88,12 @@ class CostModelSpec extends AnyFunSuite {
     assert(math.abs(t(base)("bram36") - 232) < 232 * 0.01, "the 2^13 DM node cache data alone is 232 RAMB36 (synthesized: 232)")
     val units = model.predict(base, "xc5v").map(u => u._1 -> u._3).toMap
     assert(units("TraversalUnit") == 32 && units("FpDivPipe") == 4)
+    // IUS clusters: the IU, its pipes, the MC and its caches once per cluster; the TUs and the TC once in all
+    val two = model.predict(base.copy(ius = 2), "xc5v").map(u => u._1 -> u._2).toMap; val one = model.predict(base, "xc5v").map(u => u._1 -> u._2).toMap
+    for (u <- Seq("BoxPipe", "TriPipe", "MemoryController", "CachePath"); r <- Seq("lut", "bram36"))
+      assert(math.abs(two(u)(r) - 2 * one(u)(r)) <= 1e-6 * math.max(1.0, one(u)(r)), s"$u $r: ${two(u)(r)} vs 2 x ${one(u)(r)}")
+    assert(two("TraversalUnit") == one("TraversalUnit") && two("TraversalController") == one("TraversalController"))
+    assert(model.predict(base.copy(ius = 2), "xc5v").find(_._1 == "FpDivPipe").get._3 == 5, "3 TC dividers + one per IU")
   }
 
   test("make area FIDELITY=model: the pinned keys, no synthesis, a board too small refused with both numbers (exit 3)") {

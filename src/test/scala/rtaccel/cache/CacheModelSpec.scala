@@ -178,4 +178,31 @@ class CacheModelSpec extends AnyFunSuite {
     assert(seen.groupBy(_._1).forall { case (ray, xs) => xs == orig.filter(_._1 == ray) }, "each ray keeps its own order")
     assert(seen.take(7).map(_._1).distinct.size == 7, "the first 7 accesses come from 7 different rays")
   }
+
+  test("IU clusters: each cluster's caches see exactly its own TUs' accesses; the total is the clusters' sum") {
+    val rows = sceneTrace._1
+    val p = rtaccel.config.Presets.paper2017.copy(tus = 8, ius = 2, nodeCache = CacheParams(64, 1, CachePolicy.Dm))
+    val sinks = new ClusterSinks(p)
+    // the reference: the same round-robin over 8 slots, by hand, routing slot s to cluster s / 4
+    val byCluster = Array.fill(2)(new mutable.ArrayBuffer[Int])
+    var slot = 0
+    Replay.interleaved(rows, 8, new AccessSink {
+      def node(ray: Int, id: Int, level: Int): Unit = byCluster(slot / 4) += id
+      def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = ()
+    }, s => slot = s)
+    Replay.clustered(rows, p, sinks)
+    for (c <- 0 until 2) {
+      val m = new CacheModel(p.nodeCache, CacheSink.code(p)); byCluster(c).foreach(id => m.access(id, 0))
+      val got = sinks.sinks(c).nodeCache.get
+      assert(got.hits == m.hits && got.misses == m.misses, s"cluster $c: ${got.hits}/${got.misses} vs ${m.hits}/${m.misses}")
+      assert(byCluster(c).nonEmpty)
+    }
+    val t = sinks.total
+    assert(t.nodeCache.get.hits == sinks.sinks.map(_.nodeCache.get.hits).sum && t.nodeCache.get.misses == sinks.sinks.map(_.nodeCache.get.misses).sum)
+    assert(t.nodeAccesses == rows.length / 5 - t.leafAccesses && t.nodeDramBytes == sinks.sinks.map(_.nodeDramBytes).sum)
+    // one shared cache of the same size would see a different stream: the clusters are not a relabelling
+    val shared = CacheSink(p.copy(ius = 1)); Replay.interleaved(rows, 8, shared)
+    assert(shared.nodeCache.get.misses != t.nodeCache.get.misses, "two private caches should miss differently from one shared")
+    assert(intercept[IllegalArgumentException](p.copy(tus = 7)).getMessage.contains("multiple of IUS"))
+  }
 }

@@ -52,6 +52,8 @@ class RooflineSpec extends AnyFunSuite {
     val r = run(1000, 100000, nodes = 20000, prims = 8000, beats = 30000)
     val one = Roofline.of(p, r)
     assert(Roofline.resources(p) == Roofline.Resources(1, 1))
+    assert(Roofline.resources(p.copy(ius = 4)) == Roofline.Resources(4, 1), "IUS= is what the compute bound scales with")
+    assert(Roofline.of(p.copy(ius = 4), r).computeBound.get == 4 * one.computeBound.get)
     val four = Roofline.of(p, r, Roofline.Resources(ius = 4, memChannels = 2))
     assert(four.computeBound.get == 4 * one.computeBound.get && four.boxBound.get == 4 * one.boxBound.get)
     assert(four.memoryBound.get == 2 * one.memoryBound.get && four.memUtil == one.memUtil / 2 && four.iuUtil == one.iuUtil / 4)

@@ -38,13 +38,13 @@ class PlatformSpec extends AnyFunSuite {
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
-                     packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32) = {
+                     packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
-      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat)
+      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
-    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl", memJitter = jitter, hostStall = stall,
+    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick)))
     val j = o.json
     info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +
@@ -231,6 +231,23 @@ class PlatformSpec extends AnyFunSuite {
     val st = new rtaccel.model.RayStats
     (new rtaccel.model.Traversal(rtaccel.bvh.MemoryImage.pack(b.bvh, scene, b.params)).traceAll(rays, stats = st), st.nodeFetches)
   }
+
+  // IUS clusters (docs/architecture.md): each cluster's caches see only its own TUs' accesses, so the counts equal
+  // the model replaying each cluster's log through its own caches; both clusters must have worked.
+  private val iusCases = Seq((2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
+    (2, 4, CacheParams(), CacheParams(), 17, 0)) ++ (if (!full) Nil else Seq((4, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 20),
+    (4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0), (2, 2, CacheParams(), CacheParams(), 0, 0)))
+  for ((ius, tus, node, prim, jitter, stall) <- iusCases)
+    test(s"IUS=$ius clusters at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts per cluster equal the model") {
+      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius).json
+      assert(j("ius").num == ius && j("roofline")("ius").num == ius, ujson.write(j))
+      if (node.entries > 0 || prim.entries > 0) {
+        val per = j("cluster_accesses").arr.map(_.num.toLong)
+        info(s"accesses per cluster: ${per.mkString(", ")}")
+        assert(per.length == ius && per.forall(_ > 0), s"every cluster must have worked: $per")
+        assert(per.sum == j("node_requests").num + j("counters")("leaf_requests").num, "the cluster logs must hold every access")
+      }
+    }
 
   test("random memory latency and host backpressure change no result") {
     // the quiet run is the grid's 4-TU circuit (the same build folder)
