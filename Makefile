@@ -214,9 +214,10 @@ simulate: deps
 
 # The roofline of RTL runs (docs/roofline.md): achieved rays/s against the memory bound (sustained bandwidth / DRAM
 # bytes per ray after the caches) and the compute bound (IU beats per cycle / beats per ray), for the knobs given
-# or for each TU count of ROOFLINE_TUS. Without GOLDEN, a ROOFLINE_WIDTH x ROOFLINE_HEIGHT frame with DEPTH bounces
+# or for each TU count of ROOFLINE_TUS with each IU count of ROOFLINE_IUS (a grid). Without GOLDEN, a ROOFLINE_WIDTH x ROOFLINE_HEIGHT frame with DEPTH bounces
 # is made (and kept) in build/roofline/<scene>/golden/. OUT/roofline.csv + roofline.png; JSON last line.
 ROOFLINE_TUS ?=
+ROOFLINE_IUS ?=
 ROOFLINE_WIDTH ?= 128
 ROOFLINE_HEIGHT ?= 96
 roofline: deps
@@ -227,7 +228,7 @@ roofline: deps
 	    [ "$$G/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$G WIDTH=$(ROOFLINE_WIDTH) HEIGHT=$(ROOFLINE_HEIGHT) >/dev/null || exit $$?; fi; \
 	  T=$$(tools/tris $$s) || exit $$?; \
 	  J=$$($(JAVA) rtaccel.cli.RooflineCmd --tris "$$T" --scene-label $$s --rays $$G/rays.npy --out $$OUT $(MODEL_ARGS) \
-	    $(if $(strip $(ROOFLINE_TUS)),--tus-list "$(strip $(ROOFLINE_TUS))") $(if $(SIM_BUILD),--sim-build $(SIM_BUILD)) | tail -n 1; exit $${PIPESTATUS[0]}); rc=$$?; \
+	    $(if $(strip $(ROOFLINE_TUS)),--tus-list "$(strip $(ROOFLINE_TUS))") $(if $(strip $(ROOFLINE_IUS)),--ius-list "$(strip $(ROOFLINE_IUS))") $(if $(SIM_BUILD),--sim-build $(SIM_BUILD)) | tail -n 1; exit $${PIPESTATUS[0]}); rc=$$?; \
 	  if [ $$rc -ne 0 ]; then [ -z "$$J" ] || echo "$$J"; exit $$rc; fi; \
 	  $(PY) -m dse.plot_roofline $$OUT/roofline.png $$OUT/roofline.csv || exit $$?; echo "$$J"
 

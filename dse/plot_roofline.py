@@ -1,6 +1,6 @@
 """python -m dse.plot_roofline OUT.png CSV — make roofline: achieved rays/s against the memory and compute bounds.
 
-CSV is the `roofline.csv` of rtaccel.cli.RooflineCmd (one row per TU count). Left: rays/s of the RTL and the
+CSV is the `roofline.csv` of rtaccel.cli.RooflineCmd (one row per TU count and IU count; a series per IUS). Left: rays/s of the RTL and the
 bounds (memory; compute with boxes and triangles alone) over the TUs; right: utilisation of memory, IU and TUs
 and the stall shares that say which bound binds (docs/roofline.md). The CSV's provenance line is the footer.
 """
@@ -38,17 +38,31 @@ def main(out, csv):
     kv = parse_provenance(prov[0]) if prov else {}
     tus = d["tus"].astype(float)
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11.5, 4.4))
-    for key, label, colour, style in BOUNDS:
-        v = np.array([np.nan if str(x) == "" else float(x) for x in d[key]])
-        a1.plot(tus, v, style, color=colour, label=label, marker="." if len(tus) == 1 else None)
-    a1.plot(tus, d["rays_per_s"], "ko-", label="achieved (RTL)")
-    for t, r, b in zip(tus, d["rays_per_s"], d["binding"]):
-        a1.annotate(str(b), (t, r), textcoords="offset points", xytext=(0, -12), ha="center", fontsize=7)
+    # one series per IU count (ROOFLINE_IUS): the bounds and the achieved rays/s of each
+    ius = d["ius"].astype(int)
+    groups = sorted(set(ius.tolist()))
+    markers = "osD^v<>"
+    for gi, k in enumerate(groups):
+        sel = ius == k
+        t = tus[sel]
+        tag = f", IUS={k}" if len(groups) > 1 else ""
+        for key, label, colour, style in BOUNDS:
+            if len(groups) > 1 and key in ("compute_bound_box", "compute_bound_tri"):
+                continue  # the per-kind IU bounds only on a single-IUS plot, which stays readable
+            v = np.array([np.nan if str(x) == "" else float(x) for x in d[key][sel]])
+            a1.plot(t, v, style, color=colour, alpha=1.0 - 0.6 * gi / max(1, len(groups) - 1) if len(groups) > 1 else 1.0,
+                    label=label + tag, marker="." if len(t) == 1 else None)
+        a1.plot(t, d["rays_per_s"][sel], "k" + markers[gi % len(markers)] + "-", label="achieved (RTL)" + tag)
+        for x, r, b in zip(t, d["rays_per_s"][sel], d["binding"][sel]):
+            a1.annotate(str(b), (x, r), textcoords="offset points", xytext=(0, -12), ha="center", fontsize=7)
     a1.set_yscale("log")
     a1.set_ylabel(f"rays/s at {kv.get('clock_mhz', '?')} MHz")
     a1.set_title(f"roofline: {Path(kv.get('scene', csv)).stem}, {d['rays'][0]} rays")
-    for key, label, colour, style in SHARES:
-        a2.plot(tus, 100 * d[key].astype(float), style, color=colour, label=label)
+    for gi, k in enumerate(groups):
+        sel = ius == k
+        for key, label, colour, style in SHARES:
+            a2.plot(tus[sel], 100 * d[key][sel].astype(float), style.replace("o", markers[gi % len(markers)]), color=colour,
+                    label=label + (f", IUS={k}" if len(groups) > 1 else ""))
     a2.set_ylabel("%")
     a2.set_ylim(0, 105)
     a2.set_title("utilisation and stalls")

@@ -11,9 +11,9 @@ HEADER = ("tus,rays,cycles,rays_per_s,memory_bound,compute_bound,compute_bound_b
           "mem_channels,sim_build,wall_build_s,sim_cycles_per_wall_s,sim_cycles_per_cpu_s,sim_wall_s")
 
 
-def row(tus, rate, binding):
+def row(tus, rate, binding, ius=1):
     return (f"{tus},70044,{int(70044 / rate * 150e6)},{rate},1272000,1573000,1840000,10830000,{rate / 1272000:.4f},{binding},"
-            f"memory,471.6,20.37,6.92,{rate / 1272000:.4f},{rate / 1573000:.4f},0.95,0.4,0.36,0.0001,0.011,,1,1,o1,140,80000,160000,60")
+            f"memory,471.6,20.37,6.92,{rate / 1272000:.4f},{rate / 1573000:.4f},0.95,0.4,0.36,0.0001,0.011,,{ius},1,o1,140,80000,160000,60")
 
 
 def write(path, rows):
@@ -45,3 +45,13 @@ def test_no_rows_is_one_error(tmp_path):
     with pytest.raises(SystemExit, match="no data rows"):
         plot_roofline.main(str(tmp_path / "x.png"), str(csv))
     assert not (tmp_path / "x.png").exists()
+
+
+def test_ius_grid_png(tmp_path):
+    """ROOFLINE_IUS: one series per IU count, the same TU counts in each."""
+    csv = tmp_path / "roofline.csv"
+    write(csv, [row(t, r * k, "compute", ius=k) for k in (1, 2, 4) for t, r in ((8, 3e5), (16, 5e5), (32, 6e5))])
+    out = tmp_path / "grid.png"
+    plot_roofline.main(str(out), str(csv))
+    img = matplotlib.image.imread(str(out))[..., :3].mean(axis=2)
+    assert img.shape[1] > 800 and (img < 0.5).mean() > 0.01

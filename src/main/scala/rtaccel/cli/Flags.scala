@@ -52,6 +52,7 @@ object Flags {
   val simulate: Seq[Flag] = inputs ++ platform ++ simOptions :+ f("out", "output folder")
   val sweepTus: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts"))
   val roofline: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("tus-list", "TU counts of a sweep (ROOFLINE_TUS=)"),
+    f("ius-list", "IU counts of a sweep, each with every TU count (ROOFLINE_IUS=)"),
     simOptions.find(_.name == "sim-build").get)
   val verilog: Seq[Flag] = platform :+ f("out", "output folder")
   val area: Seq[Flag] = verilog ++ Seq(f("fidelity", "yosys (a real synthesis) or model (the fitted cost model)"),

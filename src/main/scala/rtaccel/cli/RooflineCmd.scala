@@ -16,8 +16,16 @@ object RooflineCmd {
     "sim_cycles_per_cpu_s", "sim_wall_s")
 
   /** "8 16 32" or "8,16,32": the TU counts of a sweep (empty: the configuration's own TUS). */
-  def tusList(s: String): Seq[Int] = s.split("[ ,]+").filter(_.nonEmpty).map(t => t.toIntOption.filter(_ >= 1).getOrElse(
-    throw new InputError(s"ROOFLINE_TUS must be TU counts >= 1 separated by spaces or commas (got '$t')"))).toSeq
+  def tusList(s: String, what: String = "ROOFLINE_TUS", unit: String = "TU"): Seq[Int] = s.split("[ ,]+").filter(_.nonEmpty).map(t => t.toIntOption.filter(_ >= 1).getOrElse(
+    throw new InputError(s"$what must be $unit counts >= 1 separated by spaces or commas (got '$t')"))).toSeq
+
+  /** The grid of a sweep: every TU count with every IU count (each must split its TUs evenly, checked up front). */
+  def grid(tus: Seq[Int], ius: Seq[Int]): Seq[(Int, Int)] = {
+    val g = for (t <- tus; i <- ius) yield (t, i)
+    g.find { case (t, i) => t % i != 0 }.foreach { case (t, i) =>
+      throw new InputError(s"TUS=$t does not split evenly over IUS=$i; give ROOFLINE_TUS that are multiples of every ROOFLINE_IUS") }
+    g
+  }
 
   /** One CSV row / JSON point of a simulate result. */
   def point(j: ujson.Value): ujson.Obj = {
@@ -43,16 +51,17 @@ object RooflineCmd {
     val (scene, rays, e) = Cli.inputs(a)
     val base = Cli.params(a)
     val label = a.get("scene-label", a.need("tris"))
-    val list = tusList(a.get("tus-list", "")) match { case Seq() => Seq(base.tus); case l => l }
+    val list = grid(tusList(a.get("tus-list", "")) match { case Seq() => Seq(base.tus); case l => l },
+      tusList(a.get("ius-list", ""), "ROOFLINE_IUS", "IU") match { case Seq() => Seq(base.ius); case l => l })
     val build = a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named)
-    val points = list.zipWithIndex.map { case (t, i) =>
-      val b = Cli.build(scene, rays, base.copy(tus = t), a)
-      System.err.println(s"[roofline] $label: TUS=$t (${i + 1} of ${list.length}), ${rays.count} rays")
+    val points = list.zipWithIndex.map { case ((t, k), i) =>
+      val b = Cli.build(scene, rays, base.copy(tus = t, ius = k), a)
+      System.err.println(s"[roofline] $label: TUS=$t IUS=$k (${i + 1} of ${list.length}), ${rays.count} rays")
       val o = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e, build = build))
       // a failed point stops the sweep before any CSV exists, so nothing downstream plots it
-      if (!o.ok) { println(ujson.write(o.json)); throw new CheckFailed(o.failures.map(f => s"TUS=$t $f")) }
+      if (!o.ok) { println(ujson.write(o.json)); throw new CheckFailed(o.failures.map(f => s"TUS=$t IUS=$k $f")) }
       val pt = point(o.json)
-      System.err.println(f"[roofline] TUS=$t: ${pt("rays_per_s").num}%.4g rays/s, memory bound ${cell(pt("memory_bound"))}, " +
+      System.err.println(f"[roofline] TUS=$t IUS=$k: ${pt("rays_per_s").num}%.4g rays/s, memory bound ${cell(pt("memory_bound"))}, " +
         s"compute bound ${cell(pt("compute_bound"))}, ${cell(pt("roofline_fraction"))} of the nearer roof: ${pt("binding").str}")
       pt
     }
@@ -60,7 +69,7 @@ object RooflineCmd {
     val res = Roofline.resources(p)
     val sb = new StringBuilder(s"# scene=$label triangles=${scene.triangles} rays=${rays.count} config=${p.name} M=${p.m} " +
       s"MPPL=${p.mppl} clock_mhz=${p.clockMhz} mem_bytes_per_s=${p.memory.bytesPerSecond} sustained=${p.memory.sustainedEfficiency} " +
-      s"ius=${res.ius} mem_channels=${res.memChannels} node_cache=${SweepTus.desc(p.nodeCache)} prim_cache=${SweepTus.desc(p.primCache)} " +
+      s"ius=${list.map(_._2).distinct.mkString(",")} mem_channels=${res.memChannels} node_cache=${SweepTus.desc(p.nodeCache)} prim_cache=${SweepTus.desc(p.primCache)} " +
       s"binds_at=${Roofline.bindsAt} rtaccel=${Cli.version}\n")
     sb ++= columns.mkString(",") + "\n"
     for (pt <- points) sb ++= columns.map(c => cell(pt.value.getOrElse(c, ujson.Null))).mkString(",") + "\n"

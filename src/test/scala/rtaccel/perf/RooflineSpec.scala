@@ -97,5 +97,9 @@ class RooflineSpec extends AnyFunSuite {
     assert(intercept[InputError](RooflineCmd.tusList("0")).getMessage.contains("ROOFLINE_TUS"))
     assert(RooflineCmd.cell(ujson.Null) == "" && RooflineCmd.cell(ujson.Num(32)) == "32" && RooflineCmd.cell(ujson.Num(0.125)) == "0.125")
     assert(RooflineCmd.cell(ujson.Str("memory")) == "memory")
+    assert(RooflineCmd.grid(Seq(8, 16), Seq(1, 2)) == Seq((8, 1), (8, 2), (16, 1), (16, 2)))
+    val e = intercept[InputError](RooflineCmd.grid(Seq(8, 6), Seq(1, 4))).getMessage
+    assert(e.contains("TUS=6") && e.contains("IUS=4") && e.contains("ROOFLINE_IUS"), e)
+    assert(intercept[InputError](RooflineCmd.tusList("0", "ROOFLINE_IUS", "IU")).getMessage.contains("ROOFLINE_IUS must be IU counts"))
   }
 }
