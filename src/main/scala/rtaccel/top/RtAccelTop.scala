@@ -2,6 +2,7 @@ package rtaccel.top
 
 import chisel3._
 import chisel3.util._
+import chisel3.experimental.BaseModule
 import rtaccel.config.PlatformParams
 import rtaccel.iu.IntersectionUnit
 import rtaccel.cache.hw.CachePath
@@ -75,11 +76,13 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   private val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
   // IUS clusters: TU i belongs to cluster i / tusPerIu, which has its own IU, MC and caches; the MCs share the
   // one memory port (AxiReadMux). A cluster's TUs answer to their index within it.
-  val ius = Seq.fill(p.ius)(Module(new IntersectionUnit(p, axiP.dataBits, p.tusPerIu)))
+  // instance names: iu / mc as before at IUS=1 (waveforms and scripts keep their paths), iu_<c> / mc_<c> otherwise
+  private def named[T <: BaseModule](m: T, n: String, c: Int): T = { m.suggestName(if (p.ius == 1) n else s"${n}_$c"); m }
+  val ius = Seq.tabulate(p.ius)(c => named(Module(new IntersectionUnit(p, axiP.dataBits, p.tusPerIu)), "iu", c))
   // caches reorder DRAM traffic between the paths: give each path a response buffer (see MemoryController);
   // with several clusters the buffers also keep one cluster's R beats from waiting on another's
-  val mcs = Seq.fill(p.ius)(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
-    respBufferBeats = if (cached || p.ius > 1) 2 * McGeometry(p, axiP).maxBeats else 0)))
+  val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
+    respBufferBeats = if (cached || p.ius > 1) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
   regs.io.lite <> io.lite

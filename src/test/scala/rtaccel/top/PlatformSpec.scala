@@ -234,8 +234,8 @@ class PlatformSpec extends AnyFunSuite {
 
   // IUS clusters (docs/architecture.md): each cluster's caches see only its own TUs' accesses, so the counts equal
   // the model replaying each cluster's log through its own caches; both clusters must have worked.
-  private val iusCases = Seq((2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
-    (2, 4, CacheParams(), CacheParams(), 17, 0)) ++ (if (!full) Nil else Seq((4, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 20),
+  private val iusCases = Seq((2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
+    (if (!full) Nil else Seq((2, 4, CacheParams(), CacheParams(), 17, 0),(4, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 20),
     (4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0), (2, 2, CacheParams(), CacheParams(), 0, 0)))
   for ((ius, tus, node, prim, jitter, stall) <- iusCases)
     test(s"IUS=$ius clusters at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts per cluster equal the model") {
