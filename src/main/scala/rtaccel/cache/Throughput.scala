@@ -94,7 +94,7 @@ object Throughput {
 
   def predict(p: PlatformParams, s: CacheSink, rays: Int, tus: Int): Prediction = {
     val n = math.max(1, rays).toDouble
-    val bpc = p.memBytesPerCycle
+    val bpc = p.memBytesPerCycle * p.memChannels // MEM_CHANNELS: each channel has MEM_GBPS (address-interleaved)
     val beatBytes = p.axiDataBits / 8.0
     val lat = p.memory.latencyCycles.toDouble
     val nodeMisses = s.nodeDramBytes / p.nodeAccessBytes.toDouble

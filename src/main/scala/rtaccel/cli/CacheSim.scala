@@ -61,7 +61,7 @@ object CacheSim {
     }
     val nodeBpr = sink.nodeDramBytes / n; val primBpr = sink.primDramBytes / n
     val nodeBprNoCache = sink.nodeAccesses * p.nodeAccessBytes / n; val primBprNoCache = sink.primBytesAll / n
-    val sustained = p.memory.bytesPerSecond * p.memory.sustainedEfficiency // = clock x sustained bytes per cycle
+    val sustained = p.memory.bytesPerSecond * p.memory.sustainedEfficiency * p.memChannels // = clock x sustained bytes per cycle, all channels
     def bound(bpr: Double): Double = if (bpr > 0) sustained / bpr else Double.PositiveInfinity
     a.opt("sweep-out").foreach(out => sweep(rows, java.nio.file.Paths.get(out), tus, CacheSink.code(p)))
     // the analytic rung's own cost (its inputs come from the replay): the fastest of 3 calls, the first loads classes
@@ -70,7 +70,7 @@ object CacheSim {
     }.minBy(_._2)
     val j = ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
-      "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "ius" -> p.ius, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
+      "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
       "node_accesses" -> sink.nodeAccesses.toDouble, "leaf_accesses" -> sink.leafAccesses.toDouble,
       "node_cache" -> stats(nc, node), "prim_cache" -> stats(pc, prim),
       "node_bytes_per_ray" -> nodeBpr, "prim_bytes_per_ray" -> primBpr, "dram_bytes_per_ray" -> (nodeBpr + primBpr),

@@ -148,7 +148,7 @@ object Simulate {
     val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
     val rayCap = SimSetup.pow2(rays.count); val wordCap = SimSetup.pow2((imageBytes + axi.beatBytes - 1) / axi.beatBytes)
     val r = p.refs
-    val key = s"tus${p.tus}" + (if (p.ius > 1) s"-ius${p.ius}" else "") + s"-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
+    val key = s"tus${p.tus}" + (if (p.ius > 1) s"-ius${p.ius}" else "") + (if (p.memChannels > 1) s"-ch${p.memChannels}.${p.hw.channelInterleaveBytes}" else "") + s"-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
       s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" + (if (o.errorThreshold > 0) s"-err${o.errorThreshold}" else "") +
       (if (p.shortStack > 0) s"-short${p.shortStack}.${p.treeLevels}" else "") +
@@ -230,7 +230,7 @@ object Simulate {
         f"(${logged.map(_.length).sum} entries), cache check ${(System.nanoTime() - tLog) / 1e9}%.1f s")
       val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
       val n = rays.count.toDouble
-      val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond
+      val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond * p.memChannels // every channel's
       val json = ujson.Obj(
         "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
@@ -244,7 +244,7 @@ object Simulate {
         "sim_cycles_per_cpu_s" -> stepped / math.max(1e-9, simCpu), "sim_cpu_s" -> simCpu,
         // where the wall time went: model + inputs, simulator build (or cache load) + host setup, the run, readout and checks
         "wall_model_s" -> modelWall, "wall_build_s" -> (tSim - t0) / 1e9, "wall_readout_s" -> (System.nanoTime() - tEnd) / 1e9,
-        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "ius" -> p.ius, "m" -> p.m, "mppl" -> p.mppl,
+        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "m" -> p.m, "mppl" -> p.mppl,
         "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "model_restarts" -> stats.restarts.toDouble, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
         "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> rtlReadError.count(identity),

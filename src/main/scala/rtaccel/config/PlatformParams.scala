@@ -44,8 +44,13 @@ final case class HwLimits(
   cacheOutQueue: Int = 4,     // beats a cache path buffers towards the IU (>= 3: the data RAM read pipeline)
   dramQueueDepth: Int = 16,   // AR requests the simulated DRAM queues
   levelCodeBits: Int = 4,     // paper Section 7.2: node levels 0..14, 15 = 15 and deeper
-  cachePathCycles: Double = 8.0 // Throughput: extra cycles per access through a cache path (docs/caches.md)
+  cachePathCycles: Double = 8.0, // Throughput: extra cycles per access through a cache path (docs/caches.md)
+  // MEM_CHANNELS > 1: bytes of one channel's address block (channel = (addr / this) mod channels); a burst never
+  // crosses 4 KB (BurstSplitter), so a block of 4 KB or more keeps every burst in one channel
+  channelInterleaveBytes: Int = 4096
 ) {
+  require(channelInterleaveBytes >= 4096 && Integer.bitCount(channelInterleaveBytes) == 1,
+    s"the channel interleave must be a power of two >= 4096 B, so that no AXI burst spans two channels (got $channelInterleaveBytes)")
   require(axiAddrBits >= 12 && axiAddrBits <= 64, s"AXI address width must be 12..64 bits (got $axiAddrBits)")
   require(axiIdBits >= 1 && axiIdBits <= 16, s"AXI id width must be 1..16 bits (got $axiIdBits)")
   require(iuOutstanding >= 1 && iuOutstanding <= 1024, s"IU outstanding jobs must be 1..1024 (got $iuOutstanding)")
@@ -88,7 +93,8 @@ final case class PlatformParams(
   nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (bvh.Quantize, bvh.QNodeLayout)
   primPacked: Boolean = false, // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (docs/numerics.md)
   triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // TRI_FORMAT: Möller–Trumbore's arithmetic, fp32 or wider (Numerics)
-  ius: Int = 1 // IUS: intersection units, each with its own MC and caches and TUS / IUS TUs (docs/architecture.md, "IU clusters")
+  ius: Int = 1, // IUS: intersection units, each with its own MC and caches and TUS / IUS TUs (docs/platform.md, "IU clusters")
+  memChannels: Int = 1 // MEM_CHANNELS: address-interleaved DRAM channels, each an AXI4 master with MEM_GBPS of its own
 ) {
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
     s"TRI_FORMAT=${triFormat.name} is narrower than fp32; use fp32, fp64 or e<E>m<M> with E >= 8 and M >= 23")
@@ -102,6 +108,8 @@ final case class PlatformParams(
   require(treeLevels >= 1 && treeLevels <= 256, s"tree levels must be 1..256 (got $treeLevels)")
   require(tus >= 1 && tus <= 1024, s"TUS must be in 1..1024 (got $tus)")
   require(ius >= 1 && ius <= 64, s"IUS must be in 1..64 (got $ius)")
+  require(memChannels >= 1 && memChannels <= 16 && Integer.bitCount(memChannels) == 1,
+    s"MEM_CHANNELS must be 1, 2, 4, 8 or 16 (got $memChannels): the channel is address bits above the interleave block")
   require(tus % ius == 0, s"TUS=$tus does not split evenly over IUS=$ius intersection units; make TUS a multiple of IUS")
   require(Set(2, 4, 8)(m), s"M (MBVH width) must be 2, 4 or 8 (got $m)")
   require(mppl >= 1, s"MPPL must be at least 1 (got $mppl)")

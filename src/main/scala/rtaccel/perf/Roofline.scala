@@ -14,13 +14,11 @@ import rtaccel.mc.{AxiParams, McGeometry}
   * primBeats cycles. Boxes and triangles share the port, so the combined bound is the harmonic sum of the two.
   */
 object Roofline {
-  /** The replicated resources each bound scales with. Today the platform has one IU and one memory channel;
-    * when PlatformParams gains IUS= and MEM_CHANNELS=, this is the one place that reads them.
-    */
+  /** The replicated resources each bound scales with: IUS= and MEM_CHANNELS= (this is the one place that reads them). */
   final case class Resources(ius: Int, memChannels: Int) {
     require(ius >= 1 && memChannels >= 1, s"IU count and memory channels must be >= 1 (got $ius, $memChannels)")
   }
-  def resources(p: PlatformParams): Resources = Resources(ius = p.ius, memChannels = 1)
+  def resources(p: PlatformParams): Resources = Resources(ius = p.ius, memChannels = p.memChannels)
 
   /** What one IU does per cycle, from the RTL's geometry (IntersectionUnit: one beat per cycle). */
   final case class IuRates(nodeBeats: Int, primBeats: Double) {

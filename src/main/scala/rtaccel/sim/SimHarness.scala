@@ -52,8 +52,14 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val logCount = Output(Vec(p.ius, UInt(32.W)))
     val logData = Output(Vec(p.ius, UInt((32 * SimSetup.logWords).W)))
   })
-  val dram = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, s.dram, p.hw.dramQueueDepth))
-  dram.io.axi <> top.io.mem
+  // one DRAM model per memory channel, each holding the whole image (the channel only decides who serves an
+  // address) with its own bandwidth and latency; channel k > 0 draws its jitter from its own seed
+  val drams = top.memPorts.zipWithIndex.map { case (port, k) =>
+    val cfg = if (k == 0) s.dram else s.dram.copy(seed = ((s.dram.seed + 7919 * k) & 0xffff) | 1)
+    val d = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, cfg, p.hw.dramQueueDepth))
+    d.io.axi <> port
+    d
+  }
   top.io.lite <> io.lite
   io.irq := top.io.irq
 

@@ -66,7 +66,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val io = IO(new Bundle {
     val rays = Flipped(Decoupled(new AxisBeat(RtAccelTop.RayBits)))
     val hits = Decoupled(new AxisBeat(RtAccelTop.HitBits))
-    val mem = new AxiReadMaster(axiP)
+    val mem = new AxiReadMaster(axiP) // memory channel 0 (the only one unless MEM_CHANNELS > 1)
+    val memMore = if (p.memChannels > 1) Some(Vec(p.memChannels - 1, new AxiReadMaster(axiP))) else None // channels 1..
     val lite = Flipped(new AxiLite(RegMap.addrBits(RtAccelTop.counterNames)))
     val irq = Output(Bool())
     val tap = if (tapAccesses) Some(Output(Vec(p.ius, Valid(UInt(32.W))))) else None // per IU cluster
@@ -82,7 +83,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   // caches reorder DRAM traffic between the paths: give each path a response buffer (see MemoryController);
   // with several clusters the buffers also keep one cluster's R beats from waiting on another's
   val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
-    respBufferBeats = if (cached || p.ius > 1) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
+    respBufferBeats = if (cached || p.ius > 1 || p.memChannels > 1) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
   regs.io.lite <> io.lite
@@ -116,11 +117,13 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     mc.io.clearCounters := regs.io.clearCounters
   }
   io.tap.foreach(t => for ((ti, mc) <- t.zip(mcs)) { ti.valid := mc.io.req.fire; ti.bits := mc.io.req.bits.childRef })
-  if (p.ius == 1) io.mem <> mcs.head.io.axi
+  /** The memory channels' ports, channel 0 first. */
+  def memPorts: Seq[AxiReadMaster] = io.mem +: io.memMore.toSeq.flatten
+  if (p.ius == 1 && p.memChannels == 1) io.mem <> mcs.head.io.axi
   else {
-    val mux = Module(new AxiReadMux(axiP, p.ius, p.hw.mcOutstanding))
+    val mux = Module(new AxiReadMux(axiP, p.ius, p.hw.mcOutstanding, p.memChannels, log2Ceil(p.hw.channelInterleaveBytes)))
     for ((m, mc) <- mux.io.in.zip(mcs)) m <> mc.io.axi
-    io.mem <> mux.io.out
+    for ((port, o) <- memPorts.zip(mux.io.out)) port <> o
   }
 
   // counters
@@ -140,7 +143,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val events = Map(
     "cycles" -> 1.U, "batch_cycles" -> ev(regs.io.running), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
     "stall_iu_arbitration" -> ev(PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready))),
-    "stall_memory_request" -> ev(io.mem.ar.valid && !io.mem.ar.ready),
+    "stall_memory_request" -> ev(PopCount(memPorts.map(m => m.ar.valid && !m.ar.ready))),
     "stall_memory_data" -> ev(PopCount(ius.map(iu => iu.io.mem.resp.ready && !iu.io.mem.resp.valid))),
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
     "tu_busy_cycles" -> ev(PopCount(tuBusy)))

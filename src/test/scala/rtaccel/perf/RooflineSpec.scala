@@ -53,6 +53,8 @@ class RooflineSpec extends AnyFunSuite {
     val one = Roofline.of(p, r)
     assert(Roofline.resources(p) == Roofline.Resources(1, 1))
     assert(Roofline.resources(p.copy(ius = 4)) == Roofline.Resources(4, 1), "IUS= is what the compute bound scales with")
+    assert(Roofline.resources(p.copy(ius = 2, memChannels = 4)) == Roofline.Resources(2, 4), "MEM_CHANNELS= is what the memory bound scales with")
+    assert(intercept[IllegalArgumentException](p.copy(memChannels = 3)).getMessage.contains("MEM_CHANNELS"))
     assert(Roofline.of(p.copy(ius = 4), r).computeBound.get == 4 * one.computeBound.get)
     val four = Roofline.of(p, r, Roofline.Resources(ius = 4, memChannels = 2))
     assert(four.computeBound.get == 4 * one.computeBound.get && four.boxBound.get == 4 * one.boxBound.get)

@@ -38,13 +38,13 @@ class PlatformSpec extends AnyFunSuite {
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
-                     packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1) = {
+                     packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
-      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius)
+      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
-    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius", memJitter = jitter, hostStall = stall,
+    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick)))
     val j = o.json
     info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +
@@ -234,13 +234,16 @@ class PlatformSpec extends AnyFunSuite {
 
   // IUS clusters (docs/architecture.md): each cluster's caches see only its own TUs' accesses, so the counts equal
   // the model replaying each cluster's log through its own caches; both clusters must have worked.
-  private val iusCases = Seq((2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
-    (if (!full) Nil else Seq((2, 4, CacheParams(), CacheParams(), 17, 0),(4, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 20),
-    (4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0), (2, 2, CacheParams(), CacheParams(), 0, 0)))
-  for ((ius, tus, node, prim, jitter, stall) <- iusCases)
-    test(s"IUS=$ius clusters at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts per cluster equal the model") {
-      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius).json
-      assert(j("ius").num == ius && j("roofline")("ius").num == ius, ujson.write(j))
+  // MEM_CHANNELS: each channel its own DRAM model (own jitter); make test runs IUS=2 over 2 channels at once
+  private val iusCases = Seq((2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
+    (if (!full) Nil else Seq((2, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
+      (1, 2, 4, CacheParams(), CacheParams(), 17, 0), (1, 4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 10),
+      (2, 1, 4, CacheParams(), CacheParams(), 17, 0), (4, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 20),
+      (4, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0), (2, 1, 2, CacheParams(), CacheParams(), 0, 0)))
+  for ((ius, ch, tus, node, prim, jitter, stall) <- iusCases)
+    test(s"IUS=$ius clusters, MEM_CHANNELS=$ch at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts per cluster equal the model") {
+      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch).json
+      assert(j("ius").num == ius && j("roofline")("ius").num == ius && j("mem_channels").num == ch && j("roofline")("mem_channels").num == ch, ujson.write(j))
       if (node.entries > 0 || prim.entries > 0) {
         val per = j("cluster_accesses").arr.map(_.num.toLong)
         info(s"accesses per cluster: ${per.mkString(", ")}")

@@ -20,7 +20,7 @@ class VerilogLintSpec extends AnyFunSuite {
       ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru"),
       ("small", 4, 1, "--node-cache 64 --node-policy bf"),
       ("small", 4, 2, "--box-format bf16 --tri-test watertight --node-format q8 --node-cache 64 --prim-format packed --prim-cache 64 --prim-ways 2 --short-stack 4"),
-      ("small", 4, 4, "--ius 4 --node-cache 64 --prim-cache 64 --prim-ways 2")) ++ // IU clusters of one TU each, the AXI mux
+      ("small", 4, 4, "--ius 4 --mem-channels 2 --node-cache 64 --prim-cache 64 --prim-ways 2")) ++ // IU clusters of one TU each over 2 channels
     (if (!regress) Nil else Seq(("small", 2, 1, ""),
       ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
       ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight"),
