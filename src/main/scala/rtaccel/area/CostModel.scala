@@ -34,8 +34,9 @@ object CostModel {
       (if (p.primCache.entries > 0) Seq(CachePath.primGeometry(p.primCache, p.mppl, p, beat)) else Nil)
   }
 
-  /** Block RAM of the caches' data arrays (lines x beats deep, one beat + its error bit wide). */
-  def cacheDataBram(p: PlatformParams): Double = caches(p).map(g => BramMap.bram36(g.dataLines.toLong * g.lineBeats, p.axiDataBits + 1)).sum
+  /** Block RAM of the caches' data arrays as CachePath builds them: lines x beats deep, the beats of a line padded to a
+    * power of two (the line index is a shift; a packed leaf row of 5 beats takes 8), one beat + its error bit wide. */
+  def cacheDataBram(p: PlatformParams): Double = caches(p).map(g => BramMap.bram36(g.dataLines.toLong << g.beatBits, p.axiDataBits + 1)).sum
 
   val units: Seq[CostUnit] = Seq(
     CostUnit("TraversalUnit", "TraversalUnit".r, perInstance = true, p => {

@@ -4,7 +4,7 @@ import java.nio.file.{Files, Paths}
 import org.scalatest.funsuite.AnyFunSuite
 import scala.util.Random
 import rtaccel.cli.{Area, Cli, CostFit, Flags, MaxTus}
-import rtaccel.config.Presets
+import rtaccel.config.{CacheParams, CachePolicy, Presets}
 
 /** The fitted cost model: block RAM tiling, the least-squares fit, the split of a synthesis into units, the
   * committed coefficients (read back, instance counts, error on held-out syntheses) and FIDELITY=model /
@@ -94,6 +94,20 @@ class CostModelSpec extends AnyFunSuite {
       assert(math.abs(two(u)(r) - 2 * one(u)(r)) <= 1e-6 * math.max(1.0, one(u)(r)), s"$u $r: ${two(u)(r)} vs 2 x ${one(u)(r)}")
     assert(two("TraversalUnit") == one("TraversalUnit") && two("TraversalController") == one("TraversalController"))
     assert(model.predict(base.copy(ius = 2), "xc5v").find(_._1 == "FpDivPipe").get._3 == 5, "3 TC dividers + one per IU")
+  }
+
+  test("the throughput configuration of docs/roofline.md fits the paper's LX330T block RAM: IUS=2, q8 nodes, packed leaves") {
+    // per cluster: a 4096-entry DM node cache of 64 B q8 slots (2 beats) and a 4096-primitive 4-way LRU leaf cache whose
+    // 5-beat packed rows take 8-beat lines (the data RAM's line index is a shift); two clusters
+    val p = Presets.paper2017.copy(ius = 2, nodeQuantBits = 8, primPacked = true, nodeCache = CacheParams(4096, 1, CachePolicy.Dm),
+      primCache = CacheParams(4096, 4, CachePolicy.Lru))
+    val perCluster = CostModel.cacheDataBram(p)
+    info(f"cache data RAM: $perCluster%.1f RAMB36 per cluster, ${2 * perCluster}%.1f in all (LX330T: ${Boards.byName("xc5vlx330t").bram36})")
+    val g = CostModel.caches(p)
+    assert(g.length == 2 && g.map(c => c.dataLines.toLong << c.beatBits).sorted == Seq(8192L, 8192L),
+      "data RAM words: 4096 lines x 2 node beats, 1024 lines x 5 leaf beats padded to 8")
+    assert(math.abs(perCluster - 2 * BramMap.bram36(8192, 257)) < 1e-9)
+    assert(2 * perCluster <= Boards.byName("xc5vlx330t").bram36)
   }
 
   test("make area FIDELITY=model: the pinned keys, no synthesis, a board too small refused with both numbers (exit 3)") {
