@@ -265,7 +265,8 @@ def main(argv=None):
         skipped["table2"] = "PAPER_TABLE2_TUS=0"
     if not a.bench:
         skipped["bench"] = "PAPER_BENCH=0"
-    settings = {"cache-model frame": f"{a.width}x{a.height}", "RTL frame": f"{a.tus_width}x{a.tus_height}",
+    settings = {"configs": "fit (= paper2017's QBVH, MPPL 4) for the cache model, analysis and bench; paper2017 for the RTL",
+                "cache-model frame": f"{a.width}x{a.height}", "RTL frame": f"{a.tus_width}x{a.tus_height}",
                 "bounces": a.depth, "seed": a.seed, "TUs of Figs 12-13": a.tus or "none",
                 "Table 2 TUs": a.table2_tus or "none"}
     info = RunInfo(out=a.out, version=a.version, settings=settings, machine_gbps=gbps, machine_gbps_how=how,
