@@ -155,9 +155,9 @@ class Report:
             p, nodes, depth = P.TABLE1[n]
             rows.append([f"{n} (paper)", g(p), g(nodes), depth, "—"])
         self.w(table(["scene", "primitives", "nodes", "max depth", "rays (ours: camera + 5 bounces)"], rows))
-        self.w("Difference: our meshes are the paper's size class (sponza is its Sponza model); our frames are far "
-               "smaller than its 10-second renders, which the per-ray figures below do not depend on but the caches' "
-               "cold misses do.\n")
+        self.w("Difference: only sponza_dabrovic is one of the paper's models (its Sponza); the other meshes stand "
+               "in by kind, and our frames are far smaller than its 10-second renders, which the per-ray figures "
+               "below do not depend on but the caches' cold misses do.\n")
 
     def triangles(self, s):
         c, _ = read_csv(os.path.join(s.analyze_dir, "bandwidth_vs_mppl.csv"), BANDWIDTH_COLUMNS)
