@@ -122,7 +122,8 @@ class Runner:
         if rc != 0:
             self.db.put(key, "paper", config, mesh, "", name, self.a.version, store.STATUS_OF_EXIT.get(rc, store.CRASHED),
                         rc, err, None, wall)
-            tail = open(logf).read().splitlines()[-5:]
+            with open(logf) as f:
+                tail = f.read().splitlines()[-5:]
             for line in tail:
                 print(f"    {line}", file=sys.stderr)
             raise StepFailed(rc, f"{scene}: {name} (make {target}) {err}; its stdout is in {logf}; no report written")
