@@ -32,10 +32,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator z3 run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area area-fp cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity
+        yosys verilog area area-fp cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity paper
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity | paper   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -280,6 +280,21 @@ paper-caches: deps
 	  [ -z "$$f11" ] || { $(PY) -m dse.plot_caches fig11 build/paper-caches/fig11_miss_rate.png $$f11 && \
 	    $(PY) -m dse.plot_caches bytes build/paper-caches/fig8_9_bytes_per_ray.png $$f89; } || exit $$?; \
 	  [ -z "$$tus" ] || $(PY) -m dse.plot_tus build/paper-caches/fig12_13_tus.png $$tus
+
+# The paper reproduced (docs/results.md "make paper"): Figs 4, 5-6, 8, 9, 11, 12-13 with and without cache, Table 2
+# and Fig 15 on SCENES, each of our numbers beside the paper's, in OUT/report.md (default build/paper) with its
+# PNGs. Runs paper-nocache, paper-caches, analyze, roofline (Table 2: paper2017, PAPER_TABLE2_TUS, 2^13 DM) and
+# bench per scene (dse/paper.py); a rerun reuses every step whose outputs are unchanged (OUT/paper.sqlite).
+# PAPER_TUS="" skips the TU sweeps, PAPER_TABLE2_TUS=0 the Table 2 RTL run, PAPER_BENCH=0 Embree; MACHINE_GBPS
+# sets this machine's bandwidth for Fig 15 (default: measured). Absent scenes are skipped; none: the embedded room.
+SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
+PAPER_TABLE2_TUS ?= 32
+PAPER_BENCH ?= 1
+paper: deps build/scenes/cornell.obj
+	@$(PY) -m dse.paper --scenes "$(SCENES)" --fallback build/scenes/cornell.obj --out $(or $(OUT),build/paper) \
+	  --version $(VERSION) --tus "$(PAPER_TUS)" --table2-tus $(PAPER_TABLE2_TUS) --bench $(PAPER_BENCH) \
+	  --width $(PAPER_WIDTH) --height $(PAPER_HEIGHT) --tus-width $(PAPER_TUS_WIDTH) --tus-height $(PAPER_TUS_HEIGHT) \
+	  --depth $(DEPTH) --seed $(SEED) $(if $(MACHINE_GBPS),--machine-gbps $(MACHINE_GBPS)) --make "$(MAKE)"
 
 # Design-space exploration (docs/dse.md): the points of SPACE=<space file> evaluated on WORKERS Ray workers, each
 # keeping one JVM (rtaccel.cli.Serve) between points; a local Ray instance unless RAY_ADDRESS names a cluster.
