@@ -21,6 +21,9 @@ lazy val root = (project in file("."))
     scalacOptions ++= Seq("-language:reflectiveCalls", "-deprecation", "-feature", "-Xcheckinit", "-Ymacro-annotations"),
     // Tests share the 2-core machine with Verilator builds; keep them in one forked JVM with a big stack.
     Test / fork := true,
+    // Two suites at a time in that JVM: a Verilator build is half single-threaded (elaboration, verilation), so
+    // the other core compiles or simulates the next suite meanwhile. Suites share no folder (each names its own).
+    Test / testForkedParallel := true,
     Test / javaOptions ++= Seq("-Xss16m", "-Xmx6g"),
     Test / testOptions += Tests.Argument(TestFrameworks.ScalaTest, "-oD", "-u", "build/test-reports/scala"),
     Compile / run / fork := true,

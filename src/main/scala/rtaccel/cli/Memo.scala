@@ -11,7 +11,11 @@ import java.nio.file.{Files, Path}
   * Each table keeps its few most recently used entries: a trace of a large scene is hundreds of MB.
   */
 object Memo {
-  @volatile var enabled: Boolean = false
+  /** On per thread: the server answers its requests on one thread; other threads of the same JVM (test suites
+    * run side by side in one) keep computing afresh and leave the counts a test checks alone. */
+  private val on = ThreadLocal.withInitial[java.lang.Boolean](() => false)
+  def enabled: Boolean = on.get
+  def enabled_=(b: Boolean): Unit = on.set(b)
 
   /** Hits and misses per table since the JVM started (Serve reports them; tests check the reuse). */
   val hits: scala.collection.mutable.Map[String, Long] = scala.collection.mutable.Map().withDefaultValue(0L)

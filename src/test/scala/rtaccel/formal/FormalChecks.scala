@@ -13,7 +13,7 @@ import org.scalatest.flatspec.AnyFlatSpecLike
   */
 trait FormalChecks extends ChiselScalatestTester with Formal { this: AnyFlatSpecLike with Informing =>
   /** make regress (RTACCEL_REGRESS=full) runs the deeper bounds */
-  val regress: Boolean = sys.env.get("RTACCEL_REGRESS").contains("full")
+  val regress: Boolean = rtaccel.Regress.full
 
   private def run[T <: Module](gen: => T, depth: Int): Double = {
     val t0 = System.nanoTime()

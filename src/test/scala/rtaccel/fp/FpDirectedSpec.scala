@@ -71,7 +71,7 @@ class FpDirectedSpec extends AnyFunSuite with ChiselScalatestTester {
 
   // bf16 narrows the fraction only, fp16 the exponent too; make regress adds e8m15 (one Verilator build each)
   for ((fo, name) <- Seq((FpFormat(8, 7), "bf16"), (FpFormat(5, 10), "fp16")) ++
-      (if (sys.env.get("RTACCEL_REGRESS").contains("full")) Seq((FpFormat(8, 15), "e8m15")) else Nil))
+      (if (rtaccel.Regress.full) Seq((FpFormat(8, 15), "e8m15")) else Nil))
     test(s"RTL directed sub, mul and conversions (fp32 <-> $name) equal SoftFloat bit for bit") {
       val so = new SoftFloat(fo)
       val g32 = new FpTestGen(fp32, 21); val go = new FpTestGen(fo, 22)

@@ -50,7 +50,7 @@ class NodeDecodeSpec extends AnyFunSuite with ChiselScalatestTester {
     N(Seq.fill(3)(origin()), Seq.fill(3)(exp()), Seq.fill(p.m, 6)(rnd.nextInt(1 << p.nodeQuantBits)), Seq.fill(p.m)(rnd.nextInt()))
   }
 
-  private val regress = sys.env.get("RTACCEL_REGRESS").contains("full")
+  private val regress = rtaccel.Regress.full
   // q8 at M=4 is the one of make test; make regress adds the narrowest and widest planes and other widths
   private val cases = Seq((4, 8, 20000)) ++ (if (regress) Seq((2, 2, 20000), (8, 16, 20000), (4, 12, 20000)) else Nil)
   for ((m, k, nRandom) <- cases)

@@ -16,7 +16,7 @@ import rtaccel.scene.{Rays, Scene}
   * make test keeps one case per feature (the formats all in one circuit); make regress runs each on its own too.
   */
 class PlatformSpec extends AnyFunSuite {
-  private val full = sys.env.get("RTACCEL_REGRESS").contains("full")
+  private val full = rtaccel.Regress.full
   private val grid: Seq[(Int, Int, Seq[Int])] =
     if (full) for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16))
     else Seq((1, 4, Seq(1, 16)), (4, 2, Seq(2)))
@@ -45,7 +45,7 @@ class PlatformSpec extends AnyFunSuite {
       shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels", memJitter = jitter, hostStall = stall,
-      memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick)))
+      memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec"))
     val j = o.json
     info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +
       f"mismatch ${j("mismatch_vs_model").num}%.0f lost ${j("lost").num}%.0f dup ${j("duplicated").num}%.0f")
@@ -133,7 +133,7 @@ class PlatformSpec extends AnyFunSuite {
 
   // TRI_FORMAT=fp64: the widened TriPipe in the IU and the TU's fp32 check of its rounded t equal the model's
   // traversal (RayTriangleWide); make regress only (a whole platform with the wide pipe is a long build)
-  if (sys.env.get("RTACCEL_REGRESS").contains("full"))
+  if (rtaccel.Regress.full)
     test("TRI_FORMAT=fp64 at 4 TUs with a DM node cache: bit-exact against the model") {
       val w = runOne(4, 4, 4, rays, scene, node = CacheParams(64, 1, CachePolicy.Dm), triFormat = rtaccel.fp.FpFormat.fp64)
       assert(w.json("numerics")("tri_format").str == "fp64")
@@ -252,7 +252,8 @@ class PlatformSpec extends AnyFunSuite {
       }
     }
 
-  test("random memory latency and host backpressure change no result") {
+  // make regress: make test's cache, IUS and all-formats cases run under jitter and backpressure already
+  if (full) test("random memory latency and host backpressure change no result") {
     // the quiet run is the grid's 4-TU circuit (the same build folder)
     val quiet = runOne(4, 2, 2, rays, scene).json
     val noisy = runOne(4, 2, 2, rays, scene, jitter = 37, stall = 40).json

@@ -11,17 +11,16 @@ import rtaccel.cli.{Cli, EmitVerilog, Flags}
   */
 class VerilogLintSpec extends AnyFunSuite {
   private val hasYosys = (Seq("sh", "-c", "command -v yosys") ! ProcessLogger(_ => ())) == 0
-  private val regress = sys.env.get("RTACCEL_REGRESS").contains("full")
-  // the cached ones cover every policy family the RTL builds, on both paths; one circuit carries every precision and
-  // stack option at once (outward-rounded boxes, the watertight test, q8 nodes, packed leaves with a leaf-row cache
-  // line, the short stack); make regress lints each option on its own too
-  private val cases = Seq(("paper2017", 4, 32, ""), ("paper2017-lrp", 8, 2, ""),
+  private val regress = rtaccel.Regress.full
+  // the cached ones cover the DM, LRU, PLRU and hybrid (LRP) families, on both paths; one circuit carries every
+  // precision and stack option at once (outward-rounded boxes, the watertight test, q8 nodes, packed leaves with a
+  // leaf-row cache line, the short stack); make regress adds M=8, the breadth-first buffer and each option on its own
+  private val cases = Seq(("paper2017", 4, 32, ""),
       ("paper2017", 4, 8, "--node-cache 8192 --prim-cache 1024 --prim-ways 2"),
       ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru"),
-      ("small", 4, 1, "--node-cache 64 --node-policy bf"),
       ("small", 4, 2, "--box-format bf16 --tri-test watertight --node-format q8 --node-cache 64 --prim-format packed --prim-cache 64 --prim-ways 2 --short-stack 4"),
       ("small", 4, 4, "--ius 4 --mem-channels 2 --node-cache 64 --prim-cache 64 --prim-ways 2")) ++ // IU clusters of one TU each over 2 channels
-    (if (!regress) Nil else Seq(("small", 2, 1, ""),
+    (if (!regress) Nil else Seq(("small", 2, 1, ""), ("paper2017-lrp", 8, 2, ""), ("small", 4, 1, "--node-cache 64 --node-policy bf"),
       ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
       ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight"),
       ("paper2017", 4, 2, "--prim-format packed --prim-cache 64 --prim-ways 2"),
