@@ -149,6 +149,10 @@ def test_rtl_confirms_exactly_the_front_plus_margin(tmp_path, capsys, local_ray)
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
     report = (out / "report.md").read_text()
     assert "make verilog CONFIG=small" in report and "Cheap rungs against the RTL" in report
+    # no yosys_margin: the cost model alone decides, as before
+    assert j["confirmed_yosys"] == [] and j["yosys_overturned"] == [] and "yosys" not in j["by_fidelity"]
+    assert all(r[1]["fidelity"] == "model" for r in requests(log) if r[0] == "area")
+    assert "Cost model against Yosys" not in report
 
 
 def test_cost_rung_unavailable_is_recorded_as_skipped(tmp_path, capsys, local_ray):
@@ -239,11 +243,3 @@ def test_yosys_synthesizes_exactly_the_confirmed_points_near_a_limit_and_re_deci
     assert j2["by_fidelity"]["yosys"] == {"evaluated": 0, "skipped": 3, "failed": 0}
     assert (j2["confirmed_yosys"], j2["pareto"], j2["confirmed_rtl"]) == (j["confirmed_yosys"], j["pareto"], j["confirmed_rtl"])
 
-
-def test_without_yosys_margin_nothing_is_synthesized(tmp_path, capsys, local_ray):
-    sp = spaces.tiny(tmp_path, axes="TUS = [2, 3]\nNODE_CACHE = [0, 64, 256]", extra=YOSYS_SPACE.replace("yosys_margin = 0.1\n", ""))
-    jv, log = java(tmp_path, AREA=1)
-    rc, j = dse(capsys, sp, tmp_path / "out", jv)
-    assert rc == 0 and j["confirmed_yosys"] == [] and j["yosys_overturned"] == [] and "yosys" not in j["by_fidelity"]
-    assert all(r[1]["fidelity"] == "model" for r in requests(log) if r[0] == "area")
-    assert "Cost model against Yosys" not in (tmp_path / "out" / "report.md").read_text()
