@@ -242,4 +242,3 @@ def test_yosys_synthesizes_exactly_the_confirmed_points_near_a_limit_and_re_deci
     assert rc == 0 and j2["evaluated"] == 0 and len(requests(log)) == n
     assert j2["by_fidelity"]["yosys"] == {"evaluated": 0, "skipped": 3, "failed": 0}
     assert (j2["confirmed_yosys"], j2["pareto"], j2["confirmed_rtl"]) == (j["confirmed_yosys"], j["pareto"], j["confirmed_rtl"])
-
