@@ -4,7 +4,9 @@
 on Ray workers that each keep one JVM (dse/worker.py), every run stored as it ends (dse/store.py), and only the
 predicted Pareto front plus a margin confirmed with the RTL. Writes into DIR (default build/dse/<space>):
 store.sqlite, points.csv, runs.csv, front.md, report.md, pareto_*.png (dse/report.py); the last stdout line is
-{"space","points","evaluated","skipped","failed","confirmed_rtl","pareto","store","wall_s",...}.
+{"space","points","evaluated","skipped","failed","confirmed_rtl","pareto","store","wall_s",...}. With [fidelity]
+yosys_margin, the points it would confirm (and each board's best) whose model cost is near a limit are first
+synthesized with Yosys and their verdict re-decided (yosys_pass).
 Exit 0 when the sweep completed (failed points are data), 2 on a bad space file or arguments (nothing written).
 """
 import argparse
@@ -141,7 +143,7 @@ class Sweep:
         """Evaluates `fid` for every point (x scene) not yet in the store; returns {(pid, scene): row}."""
         want = []
         for c in points:
-            for s in ([None] if fid == "area" else self.scenes):
+            for s in ([None] if fid in rungs.COST_RUNGS else self.scenes):
                 scene_id, rays_id = (s["id"], s["rays_id"]) if s else ("", "")
                 key = st.run_key(c, scene_id, rays_id, fid, self.version)
                 want.append((key, c, s, scene_id, rays_id))
@@ -253,6 +255,31 @@ def confirm_set(sp, sums):
     return [cand[i]["point"] for i in order[:take]]
 
 
+def yosys_candidates(sp, sums, margin, scenes):
+    """Point ids to synthesize now: of the points the sweep would confirm with the RTL (confirm_set, whether or
+    not rtl = true) and each board's best, those not synthesized yet whose model cost of any resource is within
+    `margin` of a limit (rungs.near_limit)."""
+    want = set(confirm_set(sp, sums)) | {b["point"] for b in report.best_per_board(sp, sums, scenes, {}).values() if b}
+    return [s["point"] for s in sums if s["point"] in want and "yosys" not in s and "area" in s["metrics"]
+            and rungs.near_limit(sp.constraints, s["metrics"]["area"], margin)]
+
+
+def yosys_pass(sp, sweep, sums):
+    """The summaries with the verdicts of the points near a limit re-decided by Yosys, and the synthesized ids.
+    A point that leaves lets others into the confirm set or a board's best: they are checked in turn, until
+    every point the sweep would confirm that is near a limit has been synthesized."""
+    margin = sp.fidelity.get("yosys_margin")
+    done = []
+    while margin is not None:
+        new = yosys_candidates(sp, sums, margin, sweep.scenes)
+        if not new:
+            break
+        rows = sweep.runs("yosys", [s["config"] for s in sums if s["point"] in new])
+        sums = [report.with_yosys(sp, s, rows[(s["point"], "")]) if s["point"] in new else s for s in sums]
+        done += new
+    return sums, done
+
+
 def main(argv=None):
     ap = ArgParser(prog="make dse", description=__doc__.splitlines()[0])
     ap.add_argument("--space", required=True)
@@ -276,6 +303,7 @@ def main(argv=None):
     sweep = Sweep(sp, scenes, out, pool, a.version, a.stop_after)
     try:
         points, sums = explore(sp, sweep)
+        sums, synthesized = yosys_pass(sp, sweep, sums)
         confirmed = confirm_set(sp, sums) if sp.fidelity["rtl"] else []
         rtl = sweep.runs("rtl", [s["config"] for s in sums if s["point"] in confirmed]) if confirmed else {}
         stats = pool.stats()
@@ -293,7 +321,9 @@ def main(argv=None):
         "failed": sum(v["failed"] for v in c.values()), "confirmed_rtl": confirmed, "pareto": summary["pareto"],
         "store": os.path.join(out, "store.sqlite"), "wall_s": round(time.time() - t0, 3),
         "by_fidelity": c, "rung_error": summary["rung_error"], "best_per_board": summary["best_per_board"],
-        "csv": summary["csv"], "time_split": summary["time_split"], "workers": len(stats), "rtaccel": a.version}))
+        "csv": summary["csv"], "time_split": summary["time_split"], "workers": len(stats), "rtaccel": a.version,
+        "confirmed_yosys": synthesized, "cost_rung_error": summary["cost_rung_error"],
+        "yosys_overturned": summary["yosys_overturned"]}))
     return 0
 
 

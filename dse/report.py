@@ -39,14 +39,10 @@ def summarise(sp, config, scenes, rows):
     if a is not None:
         if a["status"] in AREA_OK:
             s["metrics"]["area"] = rungs.metrics("area", a["result"])
-            cost = s["metrics"]["area"]
-            if "fits" in sp.constraints and cost.get("fits") is False:
+            over = violations(sp, s["metrics"]["area"])
+            if over:
                 s["feasible"] = False
-                s["notes"].append("does not fit the board")
-            for lim, key in LIMITS.items():
-                if lim in sp.constraints and cost.get(key) is not None and cost[key] > sp.constraints[lim]:
-                    s["feasible"] = False
-                    s["notes"].append(f"{key} {cost[key]:g} > {lim} {sp.constraints[lim]:g}")
+                s["notes"] += over
         elif a["status"] == st.SKIPPED:
             s["notes"].append(f"cost not known ({a['error']}); constraints unchecked")
         else:
@@ -55,6 +51,63 @@ def summarise(sp, config, scenes, rows):
     cheap = {**s["metrics"].get("cachesim", {}), **s["metrics"].get("area", {})}
     s["objectives"] = {o: cheap.get(o) for o, _ in sp.objectives if cheap.get(o) is not None}
     return s
+
+
+def violations(sp, cost):
+    """Why a cost (rungs.metrics of a cost rung) breaks the space's constraints; [] when it meets them."""
+    out = ["does not fit the board"] if "fits" in sp.constraints and cost.get("fits") is False else []
+    for lim, key in LIMITS.items():
+        if lim in sp.constraints and cost.get(key) is not None and cost[key] > sp.constraints[lim]:
+            out.append(f"{key} {cost[key]:g} > {lim} {sp.constraints[lim]:g}")
+    return out
+
+
+def with_yosys(sp, s, row):
+    """A point's summary with its board verdict re-decided from a real synthesis (the yosys rung's row): the
+    constraints are checked on Yosys's numbers instead of the model's; the objectives stay the model's, so every
+    point is still ranked on one fidelity. A failed synthesis keeps the model's verdict, with a note."""
+    s = {**s, "metrics": dict(s["metrics"]), "notes": list(s["notes"]), "errors": list(s["errors"])}
+    s["model_feasible"] = s["feasible"]
+    if row["status"] not in AREA_OK:
+        s["notes"].append(f"Yosys: {row['status']}: {row['error']}; the model's verdict is kept")
+        s["yosys"] = {"status": row["status"]}
+        return s
+    y = rungs.metrics("yosys", row["result"])
+    s["metrics"]["yosys"] = y
+    model_over = violations(sp, s["metrics"]["area"])
+    over = violations(sp, y)
+    s["notes"] = [n for n in s["notes"] if n not in model_over] + [f"Yosys: {n}" for n in over]
+    s["feasible"] = not s["errors"] and "cachesim" in s["metrics"] and not over
+    s["yosys"] = {"status": row["status"], "overturned": s["feasible"] != s["model_feasible"]}
+    if s["yosys"]["overturned"]:
+        s["notes"].append("the cost model said it meets the constraints, Yosys says it does not: left the front"
+                          if s["model_feasible"] else "the cost model said it breaks the constraints, Yosys says it meets them")
+    return s
+
+
+def cost_errors(sp, sums):
+    """Per synthesized point x resource: the cost model against Yosys (relative error model / Yosys - 1), the
+    limit it was near, and both verdicts; and per resource the mean and max |error|."""
+    out = []
+    for s in sums:
+        y = s["metrics"].get("yosys")
+        if y is None:
+            continue
+        m = s["metrics"]["area"]
+        lims = rungs.limits(sp.constraints, m)
+        for r in rungs.RESOURCES:
+            if m.get(r) is None or y.get(r) is None:
+                continue
+            out.append({"point": s["point"], "resource": r, "model": m[r], "yosys": y[r],
+                        "rel_err": (m[r] - y[r]) / y[r] if y[r] else None,
+                        "limits": ", ".join(f"{n} {lim:g}" for n, _, lim in lims[r]),
+                        "model_feasible": s["model_feasible"], "yosys_feasible": s["feasible"]})
+    summary = {}
+    for r in rungs.RESOURCES:
+        xs = [abs(e["rel_err"]) for e in out if e["resource"] == r and e["rel_err"] is not None]
+        if xs:
+            summary[r] = {"mean_abs": statistics.fmean(xs), "max_abs": max(xs), "n": len(xs)}
+    return out, summary
 
 
 def active_objectives(sp, sums):
@@ -161,13 +214,14 @@ def write(sp, scenes, out, version, sums, rtl, confirmed, counts, stats, times):
     mcols = ["rays_per_s", "bw_bound_rays_per_s", "rays_per_dram_byte", "dram_bytes_per_ray", "node_miss_rate", "cache_kib"]
     acols = ["lut", "lutram", "ff", "dsp", "bram36", "fits"]
     cols = ["point", *knobs, "feasible", "on_front", "confirmed", *[f"model_{c}" for c in mcols], *[f"area_{c}" for c in acols],
-            "rtl_status", "rtl_rays_per_s", "notes", "errors"]
+            *[f"yosys_{c}" for c in acols], "rtl_status", "rtl_rays_per_s", "notes", "errors"]
     lines = []
     for s in sums:
         v = rtl_view(s, scenes, rtl) or {}
-        m, a = s["metrics"].get("cachesim", {}), s["metrics"].get("area", {})
+        m, a, y = s["metrics"].get("cachesim", {}), s["metrics"].get("area", {}), s["metrics"].get("yosys", {})
         row = [s["point"], *[s["config"].get(k, "") for k in knobs], s["feasible"], s["point"] in on_front,
-               s["point"] in confirmed, *[m.get(c) for c in mcols], *[a.get(c) for c in acols], v.get("status", ""),
+               s["point"] in confirmed, *[m.get(c) for c in mcols], *[a.get(c) for c in acols], *[y.get(c) for c in acols],
+               v.get("status", ""),
                v.get("rays_per_s"), "; ".join(s["notes"]), "; ".join(s["errors"])]
         lines.append(",".join(_csv(_fmt(x)) for x in row))
     csv_path = os.path.join(out, "points.csv")
@@ -181,24 +235,26 @@ def write(sp, scenes, out, version, sums, rtl, confirmed, counts, stats, times):
         ",".join(_csv(_fmt(x)) for x in (r["point"], r["scene"], r["fidelity"], r["status"], r["exit"], r["wall_s"], r["error"])) + "\n"
         for r in rr))
     errs, err_summary = rung_errors(sums, scenes, rtl)
+    cerrs, cerr_summary = cost_errors(sp, sums)
     best = best_per_board(sp, sums, scenes, rtl)
     pareto_json = [{"point": s["point"], "config": s["config"], **s["objectives"],
                     "rtl": (lambda v: {k: v[k] for k in ("status", "rays_per_s") if k in v} if v else None)(rtl_view(s, scenes, rtl))}
                    for s in front]
     split = time_split(times, stats)
-    md = _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums, split)
+    md = _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums, split, cerrs, cerr_summary)
     write_text(os.path.join(out, "front.md"), prov.replace("# ", "<!-- ", 1).rstrip() + " -->\n" + md["front"])
     write_text(os.path.join(out, "report.md"), prov.replace("# ", "<!-- ", 1).rstrip() + " -->\n" + md["report"])
     print(md["front"], file=sys.stderr)
     _plots(sp, out, prov, sums, on_front, set(confirmed), scenes, rtl)
-    return {"pareto": pareto_json, "rung_error": err_summary, "best_per_board": best, "csv": csv_path, "time_split": split}
+    return {"pareto": pareto_json, "rung_error": err_summary, "best_per_board": best, "csv": csv_path, "time_split": split,
+            "cost_rung_error": cerr_summary, "yosys_overturned": [s["point"] for s in sums if (s.get("yosys") or {}).get("overturned")]}
 
 
 def _csv(s):
     return f'"{s}"' if ("," in s or '"' in s) else s
 
 
-def _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums, split):
+def _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts, stats, sums, split, cerrs, cerr_summary):
     names = [o for o, _ in objs]
     f = [f"## Predicted Pareto front ({', '.join(f'{d}imize {o}' for o, d in objs) or 'no objective measured'})\n",
          "| point | configuration | " + " | ".join(names) + " | RTL rays/s |", "|---|---|" + "---|" * len(names) + "---|"]
@@ -224,6 +280,8 @@ def _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts,
         r.append("\n" + "; ".join(f"{k}: mean |err| {v['mean_abs']:.3g}, max {v['max_abs']:.3g} (n={v['n']})" for k, v in err_summary.items()))
     else:
         r.append("No point was confirmed with the RTL (fidelity rtl = false, or no feasible point).")
+    if sp.fidelity.get("yosys_margin") is not None:
+        r += _yosys_section(sp, sums, cerrs, cerr_summary)
     r += ["\n## Runs\n", "| fidelity | evaluated | reused from the store | failed |", "|---|---|---|---|"]
     r += [f"| {k} | {v['evaluated']} | {v['skipped']} | {v['failed']} |" for k, v in counts.items()]
     r += ["\nWorkers: " + ", ".join(f"{w['worker']} ({w['jvm_starts']} JVM start(s), {w['jvm_start_s']:.1f} s)" for w in stats)]
@@ -236,6 +294,29 @@ def _markdown(sp, prov, front, objs, confirmed, errs, err_summary, best, counts,
     if failed:
         r += ["\n## Failed points (data, not results)\n"] + [f"- {s['point']}: {'; '.join(s['errors'])}" for s in failed]
     return {"front": "\n".join(f) + "\n", "report": "\n".join(r) + "\n"}
+
+
+def _yosys_section(sp, sums, cerrs, cerr_summary):
+    m = sp.fidelity["yosys_margin"]
+    r = [f"\n## Cost model against Yosys (points within {100 * m:g} % of a limit)\n"]
+    tried = [s for s in sums if "yosys" in s]
+    if not tried:
+        return r + ["No point the sweep would confirm (nor a board's best) had a model cost that close to a limit."]
+    verdict = lambda ok: "meets" if ok else "breaks"  # noqa: E731
+    r += ["| point | resource | model | Yosys | model error | limits | verdict (model → Yosys) |", "|---|---|---|---|---|---|---|"]
+    for e in cerrs:
+        err = "" if e["rel_err"] is None else f"{100 * e['rel_err']:+.1f} %"
+        r.append(f"| {e['point']} | {e['resource']} | {e['model']:g} | {e['yosys']:g} | {err} | {e['limits']} | "
+                 f"{verdict(e['model_feasible'])} → {verdict(e['yosys_feasible'])} |")
+    if cerr_summary:
+        r.append("\n" + "; ".join(f"{k}: mean |err| {v['mean_abs']:.3g}, max {v['max_abs']:.3g} (n={v['n']})" for k, v in cerr_summary.items()))
+    out = [s for s in tried if s["yosys"].get("overturned")]
+    if out:
+        r.append("\nRe-decided by Yosys: " + "; ".join(f"{s['point']} ({s['notes'][-1]})" for s in out) + ".")
+    bad = [s for s in tried if s["yosys"]["status"] not in AREA_OK]
+    if bad:
+        r.append("\nSynthesis failed (the model's verdict kept): " + ", ".join(s["point"] for s in bad) + ".")
+    return r
 
 
 def _first_note(sums):

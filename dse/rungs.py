@@ -4,6 +4,9 @@
             rays/s prediction and the bandwidth bound; per point x scene; seconds
   area      FPGA cost from the fitted model (`make area FIDELITY=model`): LUT/FF/DSP/BRAM36 and "fits";
             per point (no scene); refused with status 2 by a build without the model: recorded as skipped
+  yosys     FPGA cost from a real synthesis (`make area FIDELITY=yosys`, cached per circuit in build/area-cache):
+            per point; minutes; only for the points the sweep would confirm (and each board's best) whose model
+            cost is within [fidelity] yosys_margin of a limit; its numbers re-decide their verdict
   rtl       the platform RTL under Verilator (rtaccel.cli.Simulate), checked ray by ray against the model;
             per point x scene; minutes; only for the predicted front plus a margin
 """
@@ -11,7 +14,10 @@ import math
 import os
 
 from . import store
-from .knobs import flags
+from .knobs import boards, flags
+
+COST_RUNGS = ("area", "yosys")  # per point, no scene; the same command and answer, another fidelity
+RESOURCES = ("lut", "ff", "dsp", "bram36")  # what a board's capacity and a space's max_* limits bound
 
 # make area's refusals that mean "no cost model in this build or checkout" (a build before FIDELITY=model, or
 # boards/cost-model.json not made yet by make cost-model), not "this configuration is bad"
@@ -19,14 +25,15 @@ UNAVAILABLE = ("FIDELITY=model is not available", "cost model ", "FIDELITY=model
 
 
 def task_args(fidelity, config, scene, out, board=None):
-    """(cmd, args) of one run. `scene` is a prepared scene dict (tris, rays, label); None for area."""
-    if fidelity == "area":
+    """(cmd, args) of one run. `scene` is a prepared scene dict (tris, rays, label); None for the cost rungs."""
+    if fidelity in COST_RUNGS:
         c = dict(config)
         if c.get("CONFIG", "fit") == "fit":
             c["CONFIG"] = "paper2017"  # make area synthesizes a preset; CONFIG=fit is paper2017 before fitting
         if board:
             c["BOARD"] = board
-        return "area", flags(c) + ["--fidelity", "model", "--out", os.path.join(out, "area", store.point_id(config))]
+        model = "model" if fidelity == "area" else "yosys"
+        return "area", flags(c) + ["--fidelity", model, "--out", os.path.join(out, fidelity, store.point_id(config))]
     inputs = ["--tris", scene["tris"], "--rays", scene["rays"], "--scene-label", scene["label"]]
     if fidelity == "cachesim":
         return "cachesim", inputs + flags(config)
@@ -37,9 +44,10 @@ def classify(fidelity, answer):
     """(status, error) of a run from the server's answer. An area run that says "does not fit" (status 3 with its
     result) is a measured cost of an infeasible point, not a failure; an area model this build lacks is skipped."""
     st, err, res = answer.get("status"), answer.get("error"), answer.get("result")
-    if fidelity == "area":
+    if fidelity in COST_RUNGS:
         if st == 3 and isinstance(res, dict) and res.get("fits") is False:
             return "infeasible", err
+    if fidelity == "area":
         if st == 2 and err and any(w in err for w in UNAVAILABLE):
             return store.SKIPPED, f"cost rung unavailable: {err}"
     if st == 0 and not isinstance(res, dict):
@@ -49,8 +57,8 @@ def classify(fidelity, answer):
 
 def metrics(fidelity, result):
     """The figures a rung measured, under the names objectives and the report use."""
-    if fidelity == "area":
-        return {k: result.get(k) for k in ("lut", "lutram", "ff", "dsp", "bram36", "fits")}
+    if fidelity in COST_RUNGS:
+        return {k: result.get(k) for k in ("lut", "lutram", "ff", "dsp", "bram36", "fits", "board")}
     if fidelity == "cachesim":
         bpr = result["dram_bytes_per_ray"]
         return {"rays_per_s": result["predicted_rays_per_s"], "bw_bound_rays_per_s": result["bandwidth_bound_rays_per_s"],
@@ -61,6 +69,26 @@ def metrics(fidelity, result):
     return {"rays_per_s": result["rays_per_s_at_clock"], "dram_bytes_per_ray": bpr,
             "rays_per_dram_byte": 1 / bpr if bpr > 0 else math.inf,
             "node_miss_rate": (result.get("node_cache") or {}).get("miss_rate")}
+
+
+def limits(constraints, cost):
+    """{resource: [(limit name, used, limit)]} that bound a cost (rungs.metrics of a cost rung): its board's
+    capacity (LUT sites hold logic LUTs and LUT RAM, as make area checks) and the space's max_* constraints."""
+    out = {r: [] for r in RESOURCES}
+    cap = boards().get(cost.get("board") or "")
+    for r in RESOURCES:
+        if cap and cost.get(r) is not None:
+            used = cost[r] + (cost.get("lutram") or 0) if r == "lut" else cost[r]
+            out[r].append((cost["board"], used, cap[r]))
+        if f"max_{r}" in constraints and cost.get(r) is not None:
+            out[r].append((f"max_{r}", cost[r], constraints[f"max_{r}"]))
+    return out
+
+
+def near_limit(constraints, cost, margin):
+    """The (resource, limit name, used, limit) of a cost within `margin` (a fraction) of a limit, below or above."""
+    return [(r, name, used, lim) for r, ls in limits(constraints, cost).items() for name, used, lim in ls
+            if abs(used - lim) <= margin * lim]
 
 
 def cache_kib(result):

@@ -8,7 +8,9 @@
     [objectives]   maximize = [...], minimize = [...]   (OBJECTIVES below)
     [strategy]     kind = "grid" | "random" | "optuna"; n (random), budget + sampler "nsga2"|"tpe" (optuna), seed
     [fidelity]     area = true|false (the cost model rung), rtl = true|false (confirm the predicted front),
-                   margin = extra points beyond the front to confirm, max_rtl = cap on confirmed points
+                   margin = extra points beyond the front to confirm, max_rtl = cap on confirmed points,
+                   yosys_margin = fraction (0 < f <= 1): synthesize with Yosys the points the sweep would confirm
+                   and each board's best whose model cost is within f of a limit (default: off)
 
 Any problem is one UserError naming the file and line and what to change (exit 2, nothing written).
 """
@@ -31,7 +33,7 @@ KEYS = {
     "scenes": {"procedural", "mesh", "rays", "width", "height", "depth", "seed"},
     "axes": None, "constraints": {"fits", *LIMITS}, "objectives": {"maximize", "minimize"},
     "strategy": {"kind", "n", "budget", "sampler", "seed"},
-    "fidelity": {"area", "rtl", "margin", "max_rtl"},
+    "fidelity": {"area", "rtl", "margin", "max_rtl", "yosys_margin"},
 }
 
 
@@ -227,7 +229,7 @@ def load(path):
         bad("strategy", "sampler" if "sampler" in st else "budget", "sampler and budget belong to kind = \"optuna\"")
 
     fid = {"area": any(OBJECTIVES[o][1] == "area" for o in maxi + mini) or bool(cons), "rtl": False,
-           "margin": 0, "max_rtl": 8, **doc.get("fidelity", {})}
+           "margin": 0, "max_rtl": 8, "yosys_margin": None, **doc.get("fidelity", {})}
     for k in ("area", "rtl"):
         if not isinstance(fid[k], bool):
             bad("fidelity", k, f"{k} must be true or false")
@@ -236,6 +238,13 @@ def load(path):
             bad("fidelity", k, f"{k} must be an integer >= 0")
     if not fid["area"] and (cons or any(OBJECTIVES[o][1] == "area" for o in maxi + mini)):
         bad("fidelity", "area", "the constraints or objectives need the cost rung; set area = true")
+    ym = fid["yosys_margin"]
+    if ym is not None:
+        if not isinstance(ym, (int, float)) or isinstance(ym, bool) or not 0 < ym <= 1:
+            bad("fidelity", "yosys_margin", f"yosys_margin = {ym!r}: give a fraction of the limit, 0 < yosys_margin <= 1 "
+                "(e.g. 0.1: synthesize points whose model cost is within 10 % of a limit), or leave it out")
+        if not fid["area"]:
+            bad("fidelity", "yosys_margin", "yosys_margin compares the cost model with its limits; set area = true")
 
     name = sp.get("name", os.path.splitext(os.path.basename(path))[0])
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", name):

@@ -5,6 +5,7 @@ cachesim: predicted rays/s = 1e5 * TUS * (1 + NODE_CACHE / 256) (1.5 x that with
 bytes per ray = 1000 / (1 + NODE_CACHE / 64), node miss rate 1 / (1 + NODE_CACHE / 64).
 simulate: rays/s = 0.8 x the prediction, DRAM bytes per ray 1.25 x the model's, node miss rate 0.001 below it. area: refused like a build without FIDELITY=model unless
 FAKE_SERVE_AREA=1; then lut = 1000 * TUS + NODE_CACHE, bram36 = NODE_CACHE / 64, fits when lut <= 3000.
+area --fidelity yosys (a real synthesis): the same figures with lut x FAKE_SERVE_YOSYS_SCALE (default 1.1), rounded.
 FAKE_SERVE_REFUSE_TUS=n: every run with TUS=n is refused (status 2); FAKE_SERVE_CHECK_FAIL_TUS=n: its RTL run
 fails a check (status 3); FAKE_SERVE_CRASH_TUS=n: the server process dies on its cachesim request.
 FAKE_SERVE_SLEEP=s: each answer takes s seconds (so a test can kill a sweep in the middle).
@@ -35,7 +36,10 @@ def answer(cmd, a):
         if env("FAKE_SERVE_AREA") != "1":
             return 2, None, "FIDELITY=model is not available: only FIDELITY=yosys (a real synthesis) is built so far"
         lut = 1000 * tus + nc
-        j = {"config": a.get("config"), "board": a.get("board"), "family": "xc7", "fidelity": "model", "lut": lut, "lutram": 0,
+        fid = a.get("fidelity", "yosys")
+        if fid == "yosys":
+            lut = round(lut * float(env("FAKE_SERVE_YOSYS_SCALE", "1.1")))
+        j = {"config": a.get("config"), "board": a.get("board"), "family": "xc7", "fidelity": fid, "lut": lut, "lutram": 0,
              "ff": 2 * lut, "dsp": 4 * tus, "bram36": nc / 64, "fits": lut <= 3000, "first_overflow": None, "units": {}}
         return (0 if j["fits"] else 3), j, (None if j["fits"] else f"check failed: does not fit: lut {lut} > 3000")
     if cmd == "simulate":

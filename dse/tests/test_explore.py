@@ -149,6 +149,10 @@ def test_rtl_confirms_exactly_the_front_plus_margin(tmp_path, capsys, local_ray)
         assert (out / png).read_bytes()[:4] == b"\x89PNG"
     report = (out / "report.md").read_text()
     assert "make verilog CONFIG=small" in report and "Cheap rungs against the RTL" in report
+    # no yosys_margin: the cost model alone decides, as before
+    assert j["confirmed_yosys"] == [] and j["yosys_overturned"] == [] and "yosys" not in j["by_fidelity"]
+    assert all(r[1]["fidelity"] == "model" for r in requests(log) if r[0] == "area")
+    assert "Cost model against Yosys" not in report
 
 
 def test_cost_rung_unavailable_is_recorded_as_skipped(tmp_path, capsys, local_ray):
@@ -195,3 +199,46 @@ def test_a_sweep_killed_by_a_signal_resumes(tmp_path, capsys):
     assert 3 <= done < 9
     rc, j = dse(capsys, sp, out, java(tmp_path)[0], workers=0)
     assert rc == 0 and (j["evaluated"], j["skipped"]) == (9 - done, done)
+
+
+YOSYS_SPACE = ('[constraints]\nmax_lut = 3300\n[objectives]\nmaximize = ["rays_per_s"]\nminimize = ["lut"]\n'
+               '[fidelity]\nrtl = true\nmargin = 1\nmax_rtl = 8\nyosys_margin = 0.1\n')
+
+
+def test_yosys_synthesizes_exactly_the_confirmed_points_near_a_limit_and_re_decides_them(tmp_path, capsys, local_ray):
+    # model: lut = 1000 TUS + NODE_CACHE, rays/s = 1e5 TUS (1 + NODE_CACHE/256); Yosys: lut x 1.09
+    #   A (2,0) 2000 2e5 | B (2,64) 2064 2.5e5 | C (2,256) 2256 4e5 | D (3,0) 3000 3e5 | E (3,64) 3064 3.75e5 | F (3,256) 3256 6e5
+    # all meet max_lut 3300 by the model; front A B C F, margin 1 adds E (rank 1, more rays/s than D); within 10 %
+    # of 3300 are D E F. Yosys: E 3340 and F 3549 break the limit, so they leave; then D enters the confirm set
+    # (rank 1 behind A B C), is near the limit too and is synthesized: 3270 meets it.
+    sp, out = spaces.tiny(tmp_path, axes="TUS = [2, 3]\nNODE_CACHE = [0, 64, 256]", extra=YOSYS_SPACE), tmp_path / "out"
+    jv, log = java(tmp_path, AREA=1, YOSYS_SCALE=1.09)
+    rc, j = dse(capsys, sp, out, jv)
+    assert rc == 0
+    pid = {(t, n): store.point_id({"CONFIG": "small", "TUS": t, "NODE_CACHE": n}) for t in (2, 3) for n in (0, 64, 256)}
+    A, B, C, D, E, F = (pid[k] for k in [(2, 0), (2, 64), (2, 256), (3, 0), (3, 64), (3, 256)])
+    assert j["confirmed_yosys"] == [E, F, D]
+    synth = [r[1] for r in requests(log) if r[0] == "area" and r[1]["fidelity"] == "yosys"]
+    assert sorted((int(a["tus"]), int(a["node-cache"])) for a in synth) == [(3, 0), (3, 64), (3, 256)]
+    assert sorted(j["yosys_overturned"]) == sorted([E, F])
+    assert {p["point"] for p in j["pareto"]} == {A, B, C}
+    assert set(j["confirmed_rtl"]) == {A, B, C, D}  # no RTL run of a point Yosys rejected
+    assert j["best_per_board"]["any"]["point"] == C
+    assert j["cost_rung_error"]["lut"]["n"] == 3
+    assert j["cost_rung_error"]["lut"]["max_abs"] == pytest.approx(max(1 - 3000 / 3270, 1 - 3064 / 3340, 1 - 3256 / 3549))
+    assert j["by_fidelity"]["yosys"] == {"evaluated": 3, "skipped": 0, "failed": 0}
+    rows = {r["point"]: r for r in csv.DictReader(l for l in (out / "points.csv").read_text().splitlines() if not l.startswith("#"))}
+    assert (rows[F]["feasible"], rows[F]["area_lut"], rows[F]["yosys_lut"]) == ("False", "3256", "3549")
+    assert (rows[D]["feasible"], rows[D]["yosys_lut"], rows[A]["yosys_lut"]) == ("True", "3270", "")
+    assert "Yosys: lut 3549 > max_lut 3300" in rows[F]["notes"] and "left the front" in rows[F]["notes"]
+    report = (out / "report.md").read_text()
+    assert "## Cost model against Yosys" in report
+    assert f"| {F} | lut | 3256 | 3549 | -8.3 % | max_lut 3300 | meets → breaks |" in report
+    assert f"| {D} | lut | 3000 | 3270 | -8.3 % | max_lut 3300 | meets → meets |" in report
+    assert "Re-decided by Yosys: " in report
+    # a rerun finds every synthesis in the store
+    n = len(requests(log))
+    rc, j2 = dse(capsys, sp, out, jv)
+    assert rc == 0 and j2["evaluated"] == 0 and len(requests(log)) == n
+    assert j2["by_fidelity"]["yosys"] == {"evaluated": 0, "skipped": 3, "failed": 0}
+    assert (j2["confirmed_yosys"], j2["pareto"], j2["confirmed_rtl"]) == (j["confirmed_yosys"], j["pareto"], j["confirmed_rtl"])
