@@ -14,6 +14,7 @@ from scenes.procedural import NAMES as PROCEDURAL_SCENES  # noqa: F401  (re-expo
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 PRESETS = ("fit", "paper2017", "paper2017-lrp", "small")  # rtaccel.config.Presets.all plus CONFIG=fit
 POLICIES = ("dm", "lru", "plru", "lrp", "bf", "hybrid")   # rtaccel.config.CachePolicy.parse
+LEVEL_AWARE = ("lrp", "hybrid")  # CachePolicy.levelAware: the node refs carry the tree level (paper Section 7.2)
 
 
 def boards(catalog=os.path.join(ROOT, "boards", "catalog.json")):

@@ -13,7 +13,7 @@
 import math
 import os
 
-from . import store
+from . import knobs, store
 from .knobs import boards, flags
 
 COST_RUNGS = ("area", "yosys")  # per point, no scene; the same command and answer, another fidelity
@@ -24,12 +24,20 @@ RESOURCES = ("lut", "ff", "dsp", "bram36")  # what a board's capacity and a spac
 UNAVAILABLE = ("FIDELITY=model is not available", "cost model ", "FIDELITY=model")
 
 
+def fit_preset(config):
+    """The preset make area prices for CONFIG=fit (area synthesizes a preset; fit is that preset before fitting):
+    paper2017, or paper2017-lrp when a level-aware node cache needs the level field in the node refs (paper2017's
+    refs have none, so area would refuse every LRP or hybrid point). An absent NODE_CACHE is the preset's 8192."""
+    level = config.get("NODE_POLICY") in knobs.LEVEL_AWARE and int(config.get("NODE_CACHE", 1)) > 0
+    return "paper2017-lrp" if level else "paper2017"
+
+
 def task_args(fidelity, config, scene, out, board=None):
     """(cmd, args) of one run. `scene` is a prepared scene dict (tris, rays, label); None for the cost rungs."""
     if fidelity in COST_RUNGS:
         c = dict(config)
         if c.get("CONFIG", "fit") == "fit":
-            c["CONFIG"] = "paper2017"  # make area synthesizes a preset; CONFIG=fit is paper2017 before fitting
+            c["CONFIG"] = fit_preset(c)
         if board:
             c["BOARD"] = board
         model = "model" if fidelity == "area" else "yosys"
