@@ -47,8 +47,6 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
   var hits = 0L; var misses = 0L; var bypasses = 0L
 
   def accesses: Long = hits + misses
-  /** Adds other caches' counts to this one's (ClusterSinks.total: the platform's sum over IU clusters). */
-  def addCounts(others: Seq[CacheModel]): Unit = others.foreach { o => hits += o.hits; misses += o.misses; bypasses += o.bypasses }
   def missRate: Double = if (accesses == 0) 0.0 else misses.toDouble / accesses
 
   /** One request; true on a hit. */

@@ -24,25 +24,15 @@ final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[C
     val hit = primCache match { case Some(c) => c.access(firstPrim, level); case None => false }
     if (!hit) primDramBytes += bytes
   }
+  def counts: SinkCounts = SinkCounts(nodeAccesses, leafAccesses, nodeDramBytes, primDramBytes, primTests, primBytesAll,
+    nodeCache.map(CacheCounts.of), primCache.map(CacheCounts.of))
 }
 
-/** IUS > 1: each IU cluster has its own caches (rtaccel.top.RtAccelTop). `cluster` says whose caches the next
-  * access goes to; `total` is the platform's view, the clusters' counts summed (what the RTL's counters show).
-  */
-final class ClusterSinks(p: rtaccel.config.PlatformParams) extends AccessSink {
+/** IUS > 1: each IU cluster has its own caches (rtaccel.top.RtAccelTop); `sinks(c)` is cluster c's. */
+final class ClusterSinks(p: rtaccel.config.PlatformParams) {
   val sinks: IndexedSeq[CacheSink] = IndexedSeq.fill(p.ius)(CacheSink(p))
-  var cluster = 0
-  def node(ray: Int, id: Int, level: Int): Unit = sinks(cluster).node(ray, id, level)
-  def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = sinks(cluster).leaf(ray, firstPrim, count, level)
-  /** A sink holding the sums of every cluster's counters (its caches' contents are empty; only counts are meant). */
-  def total: CacheSink = if (sinks.length == 1) sinks.head else {
-    val t = CacheSink(p)
-    t.nodeAccesses = sinks.map(_.nodeAccesses).sum; t.leafAccesses = sinks.map(_.leafAccesses).sum
-    t.nodeDramBytes = sinks.map(_.nodeDramBytes).sum; t.primDramBytes = sinks.map(_.primDramBytes).sum
-    t.primTests = sinks.map(_.primTests).sum; t.primBytesAll = sinks.map(_.primBytesAll).sum
-    t.nodeCache.foreach(_.addCounts(sinks.flatMap(_.nodeCache))); t.primCache.foreach(_.addCounts(sinks.flatMap(_.primCache)))
-    t
-  }
+  /** The platform's view: the clusters' counts summed (what the RTL's counters show). */
+  def total: SinkCounts = sinks.map(_.counts).reduce(_ + _)
 }
 
 object CacheSink {
@@ -81,14 +71,18 @@ object Replay {
     }
   }
 
-  def interleaved(rows: Array[Int], tus: Int, sink: AccessSink): Unit = interleaved(rows, tus, sink, _ => ())
+  /** One TU's order (tus = 1) or `tus` TUs interleaved, every access into `sink`. */
+  def interleaved(rows: Array[Int], tus: Int, sink: AccessSink): Unit = slots(rows, Array.fill(math.max(0, tus))(sink))
 
   /** The same for IU clusters: slot s is TU s, of cluster s / tusPerIu; each cluster's accesses go to its own caches. */
   def clustered(rows: Array[Int], p: rtaccel.config.PlatformParams, sinks: ClusterSinks): Unit =
-    interleaved(rows, p.tus, sinks, s => sinks.cluster = s / p.tusPerIu)
+    slots(rows, Array.tabulate(p.tus)(s => sinks.sinks(s / p.tusPerIu)))
 
-  /** `select(s)` runs before slot s issues its access (IU clusters route it to their caches). */
-  def interleaved(rows: Array[Int], tus: Int, sink: AccessSink, select: Int => Unit): Unit = {
+  /** The round-robin over slotSinks.length TU slots, slot s issuing into slotSinks(s): the route of an access
+    * is fixed per slot, so the loop looks up no cluster per access.
+    */
+  def slots(rows: Array[Int], slotSinks: Array[AccessSink]): Unit = {
+    val tus = slotSinks.length
     require(tus >= 1, s"TUS must be at least 1 (got $tus)")
     val n = rows.length / 5
     // start row of each run of consecutive rows with the same ray (traversal records rays one after another)
@@ -106,7 +100,7 @@ object Replay {
     while (active > 0) {
       if (pos(s) >= 0) {
         val b = 5 * pos(s)
-        select(s)
+        val sink = slotSinks(s)
         if (rows(b + 1) == 0) sink.node(rows(b), rows(b + 2), rows(b + 3))
         else sink.leaf(rows(b), rows(b + 2), rows(b + 4), rows(b + 3))
         pos(s) += 1

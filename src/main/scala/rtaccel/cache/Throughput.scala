@@ -92,9 +92,9 @@ object Throughput {
     (if (bottleneck > 0) math.min(x, 1 / bottleneck) else x, hol)
   }
 
-  def predict(p: PlatformParams, s: CacheSink, rays: Int, tus: Int): Prediction = {
+  def predict(p: PlatformParams, s: SinkCounts, rays: Int, tus: Int): Prediction = {
     val n = math.max(1, rays).toDouble
-    val bpc = p.memBytesPerCycle * p.memChannels // MEM_CHANNELS: each channel has MEM_GBPS (address-interleaved)
+    val bpc = p.memBytesPerSecondTotal / p.cyclesPerSecond // all channels (address-interleaved)
     val beatBytes = p.axiDataBits / 8.0
     val lat = p.memory.latencyCycles.toDouble
     val nodeMisses = s.nodeDramBytes / p.nodeAccessBytes.toDouble

@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import rtaccel.bvh.RefCodec
-import rtaccel.cache.{CacheModel, CacheSink, ClusterSinks, Replay}
+import rtaccel.cache.{CacheCounts, CacheModel, ClusterSinks, Replay}
 import rtaccel.config.{CacheParams, PlatformParams}
 
 /** The `node_cache` / `prim_cache` objects of make simulate: the RTL's counters beside the trace model fed
@@ -17,15 +17,15 @@ object CacheReport {
     require(logged.length == p.ius, s"one access log per IU cluster: ${logged.length} logs for IUS=${p.ius}")
     // each cluster's caches replay that cluster's own log; the RTL's counters are the clusters' sums
     val clusters = new ClusterSinks(p)
-    for ((log, c) <- logged.zipWithIndex) { clusters.cluster = c; Replay.refs(log, codec, clusters) }
-    val same = clusters.total
+    for ((log, c) <- logged.zipWithIndex) Replay.refs(log, codec, clusters.sinks(c))
+    val same = clusters.total; val geometry = clusters.sinks.head // the clusters' caches are alike
     val interC = new ClusterSinks(p); Replay.clustered(rows, p, interC); val inter = interC.total
     var ok = true
-    def one(name: String, c: CacheParams, sameM: Option[CacheModel], interM: Option[CacheModel]): ujson.Value = (sameM, interM) match {
-      case (Some(s), Some(i)) =>
+    def one(name: String, c: CacheParams, g: Option[CacheModel], sameM: Option[CacheCounts], interM: Option[CacheCounts]): ujson.Value = (g, sameM, interM) match {
+      case (Some(g), Some(s), Some(i)) =>
         val h = counters(s"${name}_cache_hits"); val m = counters(s"${name}_cache_misses"); val b = counters(s"${name}_cache_bypasses")
         ok &&= h == s.hits && m == s.misses && b == s.bypasses
-        ujson.Obj("entries" -> c.entries, "lines" -> s.lines, "ways" -> c.ways, "policy" -> c.policy.name, "max_level" -> c.maxLevel,
+        ujson.Obj("entries" -> c.entries, "lines" -> g.lines, "ways" -> c.ways, "policy" -> c.policy.name, "max_level" -> c.maxLevel,
           "hits" -> h.toDouble, "misses" -> m.toDouble, "bypasses" -> b.toDouble,
           "miss_rate" -> (if (h + m == 0) 0.0 else m.toDouble / (h + m)),
           "model_same_order" -> ujson.Obj("hits" -> s.hits.toDouble, "misses" -> s.misses.toDouble, "bypasses" -> s.bypasses.toDouble),
@@ -33,8 +33,8 @@ object CacheReport {
             "miss_rate" -> i.missRate))
       case _ => absent
     }
-    val node = one("node", p.nodeCache, same.nodeCache, inter.nodeCache)
-    val prim = one("prim", p.primCache, same.primCache, inter.primCache)
+    val node = one("node", p.nodeCache, geometry.nodeCache, same.nodeCache, inter.nodeCache)
+    val prim = one("prim", p.primCache, geometry.primCache, same.primCache, inter.primCache)
     Report(node, prim, ujson.Bool(ok))
   }
 

@@ -2,7 +2,7 @@ package rtaccel.cli
 
 import rtaccel.config.Numerics
 import rtaccel.bvh.MemoryImage
-import rtaccel.cache.{CacheModel, CacheSink, Replay}
+import rtaccel.cache.{CacheCounts, CacheModel, CacheSink, ClusterSinks, Replay}
 import rtaccel.config.{CacheParams, CachePolicy}
 import rtaccel.io.InputError
 import rtaccel.model.{AccessRecorder, AccessSink, RayStats, Traversal}
@@ -18,12 +18,12 @@ object CacheSim {
 
   def main0(a: Args): Unit = {
     val p0 = Cli.params(a) // refuses bad cache values before the scene is loaded
-    val tus = p0.tus // the preset's TUs unless TUS= is given (paper2017: 32); TUS=1 replays one TU's order
     val tLoad = System.nanoTime()
     val (scene, rays, _) = Cli.inputs(a)
     val loadS = (System.nanoTime() - tLoad) / 1e9 // ~0 when Serve kept the scene and rays
     val b = Cli.build(scene, rays, p0, a)
     val p = b.params
+    val tus = p.tus // the preset's TUs unless TUS= is given (paper2017: 32); TUS=1 replays one TU's order
     val (node, prim) = (p.nodeCache, p.primCache)
     CacheSink(p) // validate geometry before the traversal runs
     // Record once; the replay (1 or N TUs) is what is timed as the cache model. The access order depends on
@@ -42,26 +42,26 @@ object CacheSim {
     if (repeat < 1) throw new InputError(s"--repeat must be at least 1 (got $repeat)")
     val runs = (1 to repeat).map { _ =>
       // IUS > 1: each IU cluster's TUs share that cluster's caches (Replay.clustered); the counts are the sums
-      val sinks = new rtaccel.cache.ClusterSinks(p.copy(tus = tus))
+      val sinks = new ClusterSinks(p)
       val t1 = System.nanoTime()
-      Replay.clustered(rows, p.copy(tus = tus), sinks)
-      (sinks.total, (System.nanoTime() - t1) / 1e9)
+      Replay.clustered(rows, p, sinks)
+      (sinks, (System.nanoTime() - t1) / 1e9)
     }
-    val sink = runs.last._1
-    val (nc, pc) = (sink.nodeCache, sink.primCache)
+    val sink = runs.last._1.total
+    val geometry = runs.last._1.sinks.head // the clusters' caches are alike: lines and side lines from the first
     val walls = runs.map(_._2).sorted
     val wall = walls(walls.length / 2)
     val n = math.max(1, rays.count).toDouble
     val accesses = sink.nodeAccesses + sink.leafAccesses
-    def stats(c: Option[CacheModel], cp: CacheParams) = c match {
-      case Some(m) => ujson.Obj("entries" -> cp.entries, "lines" -> m.lines, "ways" -> cp.ways, "policy" -> cp.policy.name,
+    def stats(c: Option[CacheCounts], g: Option[CacheModel], cp: CacheParams) = (c, g) match {
+      case (Some(m), Some(g)) => ujson.Obj("entries" -> cp.entries, "lines" -> g.lines, "ways" -> cp.ways, "policy" -> cp.policy.name,
         "max_level" -> cp.maxLevel, "hits" -> m.hits.toDouble, "misses" -> m.misses.toDouble, "bypasses" -> m.bypasses.toDouble,
-        "miss_rate" -> m.missRate, "side_lines" -> m.sideLines)
-      case None => ujson.Obj("entries" -> 0, "hits" -> 0, "misses" -> 0, "bypasses" -> 0, "miss_rate" -> 1.0)
+        "miss_rate" -> m.missRate, "side_lines" -> g.sideLines)
+      case _ => ujson.Obj("entries" -> 0, "hits" -> 0, "misses" -> 0, "bypasses" -> 0, "miss_rate" -> 1.0)
     }
     val nodeBpr = sink.nodeDramBytes / n; val primBpr = sink.primDramBytes / n
     val nodeBprNoCache = sink.nodeAccesses * p.nodeAccessBytes / n; val primBprNoCache = sink.primBytesAll / n
-    val sustained = p.memory.bytesPerSecond * p.memory.sustainedEfficiency * p.memChannels // = clock x sustained bytes per cycle, all channels
+    val sustained = p.memBytesPerSecondTotal
     def bound(bpr: Double): Double = if (bpr > 0) sustained / bpr else Double.PositiveInfinity
     a.opt("sweep-out").foreach(out => sweep(rows, java.nio.file.Paths.get(out), tus, CacheSink.code(p)))
     // the analytic rung's own cost (its inputs come from the replay): the fastest of 3 calls, the first loads classes
@@ -72,7 +72,7 @@ object CacheSim {
       "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
       "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
       "node_accesses" -> sink.nodeAccesses.toDouble, "leaf_accesses" -> sink.leafAccesses.toDouble,
-      "node_cache" -> stats(nc, node), "prim_cache" -> stats(pc, prim),
+      "node_cache" -> stats(sink.nodeCache, geometry.nodeCache, node), "prim_cache" -> stats(sink.primCache, geometry.primCache, prim),
       "node_bytes_per_ray" -> nodeBpr, "prim_bytes_per_ray" -> primBpr, "dram_bytes_per_ray" -> (nodeBpr + primBpr),
       "node_bytes_per_ray_nocache" -> nodeBprNoCache, "prim_bytes_per_ray_nocache" -> primBprNoCache,
       "node_bandwidth_reduction" -> (if (nodeBpr > 0) nodeBprNoCache / nodeBpr else Double.PositiveInfinity),

@@ -230,7 +230,7 @@ object Simulate {
         f"(${logged.map(_.length).sum} entries), cache check ${(System.nanoTime() - tLog) / 1e9}%.1f s")
       val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
       val n = rays.count.toDouble
-      val peakBytesPerCycle = p.memory.bytesPerSecond / p.cyclesPerSecond * p.memChannels // every channel's
+      val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
       val json = ujson.Obj(
         "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,

@@ -167,5 +167,15 @@ final case class PlatformParams(
   /** TUs per IU cluster: TU i belongs to cluster i / tusPerIu (its IU, MC and caches). */
   val tusPerIu: Int = tus / ius
   val cyclesPerSecond: Double = clockMhz * 1e6
+  /** Sustained DRAM bytes per cycle of ONE channel: MEM_GBPS is per channel, since each of the MEM_CHANNELS is an
+    * AXI4 master with a DRAM of its own, and the simulator models each channel alone (sim.DramModel at this rate).
+    */
   val memBytesPerCycle: Double = memory.bytesPerSecond * memory.sustainedEfficiency / cyclesPerSecond
+  /** Peak DRAM bytes per second over ALL channels: address interleaving spreads the accesses over every channel,
+    * so the platform's bandwidth is the channels' sum. The one place that scales MEM_GBPS by MEM_CHANNELS: the
+    * figures of the whole platform (bandwidth bounds, roofline, throughput model, utilisation) derive from it.
+    */
+  val memPeakBytesPerSecondTotal: Double = memory.bytesPerSecond * memChannels
+  /** Its sustained share (MemoryParams.sustainedEfficiency), what the DRAM model delivers over all channels. */
+  val memBytesPerSecondTotal: Double = memPeakBytesPerSecondTotal * memory.sustainedEfficiency
 }

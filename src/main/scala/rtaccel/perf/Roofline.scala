@@ -89,7 +89,8 @@ object Roofline {
     val n = r.rays.toDouble; val cyc = r.cycles.toDouble
     val dramBytes = r.memBusyBeats.toDouble * axi.beatBytes / n
     val nodes = r.nodeRequests / n; val prims = r.primRequests / n
-    val sustained = p.memory.bytesPerSecond * p.memory.sustainedEfficiency * res.memChannels
+    // one channel's share of the platform's total, times the channels of `res` (a what-if may name other counts)
+    val sustained = p.memBytesPerSecondTotal / p.memChannels * res.memChannels
     val iuBeatsPerS = clock * res.ius
     Result(
       raysPerS = n / cyc * clock,

@@ -25,6 +25,11 @@ object SimSetup {
     * peek through the simulator interface costs microseconds and a scene run logs tens of millions of accesses.
     */
   val logWords = 16
+  /** Step between the jitter seeds of the DRAM channels' models: channel k > 0 starts its LFSR from
+    * dram.seed + k x this step (16 bits, odd): a prime step, so that the seeds of up to 16 channels differ
+    * for every dram.seed and their jitter does not move in lockstep. A simulation choice, no hardware's.
+    */
+  val channelSeedStep = 7919
   def pow2(n: Long): Int = { var c = 1L; while (c < n) c <<= 1; require(c <= (1 << 30), s"$n entries is too large to simulate"); c.toInt }
 }
 
@@ -55,7 +60,7 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   // one DRAM model per memory channel, each holding the whole image (the channel only decides who serves an
   // address) with its own bandwidth and latency; channel k > 0 draws its jitter from its own seed
   val drams = top.memPorts.zipWithIndex.map { case (port, k) =>
-    val cfg = if (k == 0) s.dram else s.dram.copy(seed = ((s.dram.seed + 7919 * k) & 0xffff) | 1)
+    val cfg = if (k == 0) s.dram else s.dram.copy(seed = ((s.dram.seed + SimSetup.channelSeedStep * k) & 0xffff) | 1)
     val d = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, cfg, p.hw.dramQueueDepth))
     d.io.axi <> port
     d
@@ -87,6 +92,10 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
 
   io.logCount.foreach(_ := 0.U)
   io.logData.foreach(_ := 0.U)
+  // every cluster's log holds ALL accesses (accessLogCapacity, sized for the whole run), not a 1/IUS share: the
+  // controller hands a ray to the lowest-numbered free TU, so a cluster can make any share of the accesses (cluster 0
+  // all of them when the batch has no more rays than a cluster has TUs) and a share-sized log could overflow.
+  // The cost is simulator memory only, IUS x the capacity.
   top.io.tap.foreach(_.zipWithIndex.foreach { case (t, c) =>
     val w = SimSetup.logWords
     val logCount = RegInit(0.U(32.W))

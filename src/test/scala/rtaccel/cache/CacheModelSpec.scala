@@ -183,13 +183,14 @@ class CacheModelSpec extends AnyFunSuite {
     val rows = sceneTrace._1
     val p = rtaccel.config.Presets.paper2017.copy(tus = 8, ius = 2, nodeCache = CacheParams(64, 1, CachePolicy.Dm))
     val sinks = new ClusterSinks(p)
-    // the reference: the same round-robin over 8 slots, by hand, routing slot s to cluster s / 4
-    val byCluster = Array.fill(2)(new mutable.ArrayBuffer[Int])
-    var slot = 0
-    Replay.interleaved(rows, 8, new AccessSink {
-      def node(ray: Int, id: Int, level: Int): Unit = byCluster(slot / 4) += id
+    // the reference: the same round-robin over 8 slots, the node ids in issue order with their slot, routed by hand
+    // to cluster s / 4
+    val issued = new mutable.ArrayBuffer[(Int, Int)]
+    Replay.slots(rows, Array.tabulate[AccessSink](8)(s => new AccessSink {
+      def node(ray: Int, id: Int, level: Int): Unit = issued += ((s, id))
       def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = ()
-    }, s => slot = s)
+    }))
+    val byCluster = Array.tabulate(2)(c => issued.collect { case (s, id) if s / 4 == c => id })
     Replay.clustered(rows, p, sinks)
     for (c <- 0 until 2) {
       val m = new CacheModel(p.nodeCache, CacheSink.code(p)); byCluster(c).foreach(id => m.access(id, 0))

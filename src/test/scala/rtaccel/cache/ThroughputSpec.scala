@@ -21,7 +21,7 @@ class ThroughputSpec extends AnyFunSuite {
     def sink(cached: Boolean) = {
       val s = new CacheSink(if (cached) Some(new CacheModel(CacheParams(8, 1, CachePolicy.Dm), LevelPolicy.paper)) else None, None, 128, c => c * 64L)
       for (r <- 0 until 2) { s.node(r, 0, 0); s.node(r, 1, 1); s.leaf(r, 0, 3, 2) } // 2 rays: 2 nodes + a 3-prim leaf each
-      s
+      s.counts
     }
     val u = Throughput.predict(p, sink(cached = false), rays = 2, tus = 1)
     // per ray: 2 node misses x (40 + 32) + 1 leaf x 40 + 192 B / 4 = 144 + 40 + 48
@@ -126,8 +126,8 @@ class ThroughputSpec extends AnyFunSuite {
     val p = Presets.paper2017.copy(hw = HwLimits(iuOutstanding = 4))
     val s = new CacheSink(None, None, 128, c => c * 64L)
     for (r <- 0 until 4) { s.node(r, 0, 0); s.leaf(r, 0, 2, 1) }
-    val at4 = Throughput.predict(p, s, rays = 4, tus = 4)
-    val at32 = Throughput.predict(p, s, rays = 4, tus = 32)
+    val at4 = Throughput.predict(p, s.counts, rays = 4, tus = 4)
+    val at32 = Throughput.predict(p, s.counts, rays = 4, tus = 32)
     assert(at32.inFlightLimit == 4 && at32.raysPerCycle == at4.raysPerCycle)
     assert(at32.raysPerCycleNoHol > at4.raysPerCycleNoHol) // the plain MVA had no limit
   }
