@@ -53,7 +53,20 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     }
     ok
   }
+  // ... and every non-empty child's box has min <= max on each axis: then a regular ray takes hitChildrenOrdered
+  private[this] val orderedBoxes = nanFreeBoxes && {
+    var ok = true; var w = 0
+    while (ok && w < nodes.length) { // child j's min words 7j .. 7j+2, each against its max 3 words on
+      val q = w % nodeWords
+      if (q < 7 * m && q % 7 < 3 && !codec.isEmpty(nodes(w - q % 7 + 6))) ok = f(nodes(w)) <= f(nodes(w + 3))
+      w += 1
+    }
+    ok
+  }
   private[this] var regular = false // the current ray takes the fast box test
+  private[this] var ordered = false // ... and the ordered one (regular on orderedBoxes)
+  // the near plane of each axis for the current ray: word 0 (min) when the reciprocal direction is positive, else 3 (max)
+  private[this] var nearX = 0; private[this] var nearY = 0; private[this] var nearZ = 0
   // the current ray's counters, added to the caller's RayStats when the ray is done (record)
   private[this] var nodeFetches = 0L; private[this] var leafFetches = 0L; private[this] var primTests = 0L
   private[this] var boxTests = 0L; private[this] var maxStack = 0
@@ -85,7 +98,8 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
 
   /** Makes ray i the current ray and clears its counters and closest hit. */
   private def start(i: Int, rays: Rays): Unit = {
-    r.set(rays.data, i); regular = nanFreeBoxes && r.regular
+    r.set(rays.data, i); regular = nanFreeBoxes && r.regular; ordered = regular && orderedBoxes
+    nearX = if (r.ix > 0f) 0 else 3; nearY = if (r.iy > 0f) 0 else 3; nearZ = if (r.iz > 0f) 0 else 3
     nodeFetches = 0L; leafFetches = 0L; primTests = 0L; boxTests = 0L; maxStack = 0; primBytes = 0L
     hitPrim = -1; hitU = 0f; hitV = 0f; primError = false
   }
@@ -218,7 +232,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   /** Slab-tests the non-empty children of node `id` and leaves the hit ones in cRef/cT sorted by entry
     * distance (stable: equal distances keep slot order); returns how many hit.
     */
-  private def hitChildren(tmax: Float, id: Int): Int = {
+  private def hitChildren(tmax: Float, id: Int): Int = if (ordered) hitChildrenOrdered(tmax, id) else {
     var k = 0; var j = 0
     var w = id * nodeWords // child j: min x,y,z, max x,y,z (float bits), ref at w .. w+6 (MemoryImage.planes)
     while (j < m) {
@@ -228,15 +242,44 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
         val tn = if (regular) RayBox.testRegular(r, tmax, f(nodes(w)), f(nodes(w + 1)), f(nodes(w + 2)), f(nodes(w + 3)), f(nodes(w + 4)), f(nodes(w + 5)))
           else if (outward == null) RayBox.test(r, tmax, f(nodes(w)), f(nodes(w + 1)), f(nodes(w + 2)), f(nodes(w + 3)), f(nodes(w + 4)), f(nodes(w + 5)), slack)
           else outward.test(r, tmax, f(nodes(w)), f(nodes(w + 1)), f(nodes(w + 2)), f(nodes(w + 3)), f(nodes(w + 4)), f(nodes(w + 5)))
-        if (!tn.isNaN) {
-          var pos = k
-          while (pos > 0 && cT(pos - 1) > tn) { cRef(pos) = cRef(pos - 1); cT(pos) = cT(pos - 1); pos -= 1 }
-          cRef(pos) = ref; cT(pos) = tn; k += 1
-        }
+        if (!tn.isNaN) { insert(k, ref, tn); k += 1 }
       }
       j += 1; w += 7
     }
     k
+  }
+
+  /** hitChildren for a regular ray on orderedBoxes, the same hits in the same order. With no NaN anywhere, a
+    * finite nonzero reciprocal direction and min <= max, (min - o) * inv <= (max - o) * inv when inv > 0 and the
+    * reverse when inv < 0 (subtraction and multiplication are monotone), so the per-axis min and max of the slab
+    * test are the near and the far plane chosen once per ray, and 6 of its 12 min/max go. The remaining min/max
+    * are Math.min/max (branch-free; see RayBox.testRegular). tnear then equals RayBox.test's but for the sign
+    * of a zero, which nothing observes: the entry distance is only compared (the sort, the pop's cull), and
+    * -0 == +0 in every comparison.
+    */
+  private def hitChildrenOrdered(tmax: Float, id: Int): Int = {
+    var k = 0; var j = 0
+    val ox = r.ox; val oy = r.oy; val oz = r.oz; val ix = r.ix; val iy = r.iy; val iz = r.iz; val tmin = r.tmin
+    val nx = nearX; val ny = nearY; val nz = nearZ
+    var w = id * nodeWords
+    while (j < m) {
+      val ref = nodes(w + 6)
+      if (!codec.isEmpty(ref)) {
+        boxTests += 1
+        val tn = Math.max(Math.max(Math.max(tmin, (f(nodes(w + nx)) - ox) * ix), (f(nodes(w + 1 + ny)) - oy) * iy), (f(nodes(w + 2 + nz)) - oz) * iz)
+        val tf = Math.min(Math.min(Math.min(tmax, (f(nodes(w + 3 - nx)) - ox) * ix), (f(nodes(w + 4 - ny)) - oy) * iy), (f(nodes(w + 5 - nz)) - oz) * iz)
+        if (tn <= tf) { insert(k, ref, tn); k += 1 }
+      }
+      j += 1; w += 7
+    }
+    k
+  }
+
+  /** Inserts hit child `ref` at entry distance tn among the k sorted in cRef/cT, after the equal ones (stable). */
+  @inline private def insert(k: Int, ref: Int, tn: Float): Unit = {
+    var pos = k
+    while (pos > 0 && cT(pos - 1) > tn) { cRef(pos) = cRef(pos - 1); cT(pos) = cT(pos - 1); pos -= 1 }
+    cRef(pos) = ref; cT(pos) = tn
   }
 
   @inline private def f(bits: Int): Float = java.lang.Float.intBitsToFloat(bits)
