@@ -97,16 +97,25 @@ class TraversalReferenceSpec extends AnyFunSuite {
   }
 
   private def check(name: String, scene: Scene, ry: Rays, p0: PlatformParams, stack: Option[Int] = None,
-                    faultThreshold: Int = 0, nanInEmptySlot: Boolean = false): Unit = {
+                    faultThreshold: Int = 0, nanInEmptySlot: Boolean = false, swappedPlanes: Boolean = false): Unit = {
     val bvh = Mbvh.build(scene, p0)
     val p = stack.fold(Fit.fitTo(p0, bvh))(s => Fit.fitTo(p0, bvh).copy(stackDepth = s))
     val img0 = MemoryImage.pack(bvh, scene, p)
-    val img = if (!nanInEmptySlot) img0 else {
+    val img = if (nanInEmptySlot) {
       // a NaN in the box words of an empty child slot: never tested, but it turns the fast box test off
       val n = bvh.nodes.find(_.children.length < p.m).getOrElse(cancel(s"$name: no node with an empty slot"))
       val nodes = img0.nodes.clone; nodes(n.id * img0.nodeWords + 7 * n.children.length) = java.lang.Float.floatToRawIntBits(Float.NaN)
       img0.copy(nodes = nodes)
-    }
+    } else if (swappedPlanes) {
+      // the root's first child with min and max swapped on an axis where they differ: the slab test takes the
+      // min and max of the two planes, so it sees the same box as the reference's, but a box with min > max must
+      // keep every ray off the ordered test (which takes the near plane from the ray's direction alone)
+      val w = 0 // the root is node 0 (Mbvh: breadth-first ids)
+      val f = (k: Int) => java.lang.Float.intBitsToFloat(img0.nodes(w + k))
+      val axis = (0 until 3).find(a => f(a) < f(a + 3)).getOrElse(cancel(s"$name: the root's first child is flat"))
+      val nodes = img0.nodes.clone; nodes(w + axis) = img0.nodes(w + axis + 3); nodes(w + axis + 3) = img0.nodes(w + axis)
+      img0.copy(nodes = nodes)
+    } else img0
     val faults = if (faultThreshold == 0) MemFaults.none
       else MemFaults(faultThreshold, 5, 32, p.nodeStrideBytes, img.nodes.length * 4L, p.primStrideBytes)
     val rec = new AccessRecorder; val st = new RayStats
@@ -133,12 +142,13 @@ class TraversalReferenceSpec extends AnyFunSuite {
     }
 
   for ((name, scene, ry) <- scenes)
-    test(s"optimized traversal == reference under stack overflow, poisoned memory, bf16 boxes and a NaN box word: $name") {
+    test(s"optimized traversal == reference under stack overflow, poisoned memory, bf16 boxes, a NaN box word and a box with min > max: $name") {
       val p = PlatformParams(m = 4, mppl = 4)
       check(s"$name stack=2", scene, ry, p, stack = Some(2))
       check(s"$name faults", scene, ry, p, faultThreshold = 3000)
       check(s"$name bf16", scene, ry, p.copy(boxFormat = FpFormat.parse("bf16")))
       check(s"$name NaN word", scene, ry, p, nanInEmptySlot = true)
+      check(s"$name min > max", scene, ry, p, swappedPlanes = true)
     }
 
   test("RayBox.testRegular == RayBox.test bit for bit on regular rays (ties, zeros of both signs, infinities)") {
