@@ -4,6 +4,7 @@ One table, so that a space file, the JVM requests and the `make verilog ...` com
 the same way. The checks here are the ones a space file can be refused for up front; combinations the platform
 refuses (e.g. MPPL over a preset's leaf count field) are refused by the JVM and recorded as failed points.
 """
+import functools
 import json
 import os
 import re
@@ -17,7 +18,10 @@ POLICIES = ("dm", "lru", "plru", "lrp", "bf", "hybrid")   # rtaccel.config.Cache
 LEVEL_AWARE = ("lrp", "hybrid")  # CachePolicy.levelAware: the node refs carry the tree level (paper Section 7.2)
 
 
+@functools.lru_cache(maxsize=None)
 def boards(catalog=os.path.join(ROOT, "boards", "catalog.json")):
+    """The board catalog, read once per process: knob checks and the Yosys rung's near-limit test ask it per point
+    (read-only to every caller)."""
     with open(catalog) as f:
         return json.load(f)["boards"]
 
