@@ -24,6 +24,9 @@ import rtaccel.config.PlatformParams
   * E[max(0, Rm - c - age)] = w (1 - (1 - e^-u) / u) cycles more, w = Rm - c, u = w Qm / Rm. That wait joins
   * the ray's delay; X(k) and the wait depend on each other and are solved as a fixed point per population.
   * It is 0 with one TU (nothing else in flight) and without hits (no cache).
+  * RESP_ORDER=path: the MC answers nodes and leaves in two streams, each over its own response port (and IU
+  * collection); a stream's hits wait behind that stream's youngest miss only, and up to hw.iuOutstanding
+  * accesses of each kind are in flight (the IU's two job FIFOs), so the limit is min(TUs, 2 hw.iuOutstanding).
   * At most min(TUs, hw.iuOutstanding, hw.mcOutstanding) rays have an access in the MC: the rest wait at the
   * IU's arbiter, and since the model's ray time is all memory time, N beyond that limit adds nothing.
   * Measured against the RTL and against an event simulation of the same in-order network in docs/dse.md
@@ -66,31 +69,43 @@ object Throughput {
     }
 
   /** Rays per cycle and head-of-line blocking cycles per ray of n rays in flight over the DRAM (demand `dram`
-    * per ray) and the response port (`port`), both FCFS with constant service per visit, plus `delay`. */
-  def mvaInOrder(delay: Double, dram: Double, port: Double, s: InOrder, n: Int): (Double, Double) = {
+    * per ray) and the response ports (`ports`, one demand per port), all FCFS with constant service per visit,
+    * plus `delay`. Each of `streams` is answered in its own order: its hits wait behind its own youngest miss
+    * only (RESP_ORDER=request: one stream; path: nodes and leaves). */
+  def mvaInOrder(delay: Double, dram: Double, ports: Seq[Double], streams: Seq[InOrder], n: Int): (Double, Double) = {
     require(n >= 1, s"TUs must be at least 1 (got $n)")
-    var (qD, qB, uD, uB) = (0.0, 0.0, 0.0, 0.0) // queue lengths and utilisations of the population before
+    var (qD, uD) = (0.0, 0.0) // queue length and utilisation of the DRAM for the population before
+    var qB = ports.map(_ => 0.0); var uB = ports.map(_ => 0.0)
+    val misses = streams.map(_.misses).sum
     var x = 0.0; var hol = 0.0
     for (k <- 1 to n) {
       val rD = dram * (1 + qD - uD / 2)
-      val rB = port * (1 + qB - uB / 2)
-      val inFlight = if (s.misses > 0) s.missLatency + rD / s.misses else 0.0
+      val rBs = ports.indices.map(i => ports(i) * (1 + qB(i) - uB(i) / 2)); val rB = rBs.sum
+      // a miss is in flight its DRAM latency plus its share of the DRAM residence (the DRAM serves every stream)
+      def inFlight(st: InOrder) = if (misses > 0) st.missLatency + rD / misses else 0.0
       // the fixed point of X(k) and the blocking it causes (damped: the map is decreasing in X)
       var xk = k / (delay + rD + rB); var it = 0; var done = false
       while (!done && it < 200) {
-        val othersInFlight = (k - 1.0) / k * xk * s.misses * inFlight
-        hol = s.hits * youngestResidual(inFlight - s.hitLatency, othersInFlight, inFlight)
+        hol = streams.map { st =>
+          val m = inFlight(st)
+          st.hits * youngestResidual(m - st.hitLatency, (k - 1.0) / k * xk * st.misses * m, m)
+        }.sum
         val next = k / (delay + hol + rD + rB)
         done = math.abs(next - xk) <= 1e-12 * xk
         xk = if (done) next else (xk + next) / 2
         it += 1
       }
       x = xk
-      qD = x * rD; qB = x * rB; uD = x * dram; uB = x * port
+      qD = x * rD; uD = x * dram
+      qB = rBs.map(_ * x); uB = ports.map(_ * x)
     }
-    val bottleneck = math.max(dram, port)
+    val bottleneck = (dram +: ports).max
     (if (bottleneck > 0) math.min(x, 1 / bottleneck) else x, hol)
   }
+
+  /** One in-order stream over one response port (RESP_ORDER=request). */
+  def mvaInOrder(delay: Double, dram: Double, port: Double, s: InOrder, n: Int): (Double, Double) =
+    mvaInOrder(delay, dram, Seq(port), Seq(s), n)
 
   def predict(p: PlatformParams, s: SinkCounts, rays: Int, tus: Int): Prediction = {
     val n = math.max(1, rays).toDouble
@@ -99,24 +114,36 @@ object Throughput {
     val lat = p.memory.latencyCycles.toDouble
     val nodeMisses = s.nodeDramBytes / p.nodeAccessBytes.toDouble
     val leafMisses = s.primCache.fold(s.leafAccesses.toDouble)(_.misses.toDouble)
-    val hitBytes = (s.nodeAccesses * p.nodeAccessBytes - s.nodeDramBytes) + (s.primBytesAll - s.primDramBytes)
+    val nodeHitBytes = (s.nodeAccesses * p.nodeAccessBytes - s.nodeDramBytes).toDouble
+    val primHitBytes = (s.primBytesAll - s.primDramBytes).toDouble
+    val hitBytes = nodeHitBytes + primHitBytes
     val cachePathCycles = p.hw.cachePathCycles
-    val overhead = s.nodeCache.fold(0.0)(_ => cachePathCycles) * s.nodeAccesses + s.primCache.fold(0.0)(_ => cachePathCycles) * s.leafAccesses
+    val nodeOverhead = s.nodeCache.fold(0.0)(_ => cachePathCycles) * s.nodeAccesses
+    val primOverhead = s.primCache.fold(0.0)(_ => cachePathCycles) * s.leafAccesses
+    val overhead = nodeOverhead + primOverhead
     val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n
     val dram = (s.nodeDramBytes + s.primDramBytes) / bpc / n
+    val nodeBeats = s.nodeAccesses * p.nodeAccessBytes / beatBytes / n
+    val primBeats = s.primBytesAll / beatBytes / n
     val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primBytesAll) / beatBytes / n
     val delay = math.max(0.0, latency - dram - beats)
-    val accesses = s.nodeAccesses.toDouble + s.leafAccesses
-    val hits = accesses - nodeMisses - leafMisses
     // a lone hit: the path's overhead (every access of a cached path pays it) and its beats from the cache
-    val hitLatency = if (hits > 0) overhead / accesses + hitBytes / beatBytes / hits else 0.0
-    val stream = InOrder(hits / n, (nodeMisses + leafMisses) / n, hitLatency, lat)
+    def stream(accesses: Double, misses: Double, over: Double, hb: Double): InOrder = {
+      val hits = accesses - misses
+      InOrder(hits / n, misses / n, if (hits > 0) over / accesses + hb / beatBytes / hits else 0.0, lat)
+    }
+    // RESP_ORDER=request: one stream over both paths and one response port; path: a stream and a port per path
+    val (ports, streams) =
+      if (p.respByPath) (Seq(nodeBeats, primBeats),
+        Seq(stream(s.nodeAccesses.toDouble, nodeMisses, nodeOverhead, nodeHitBytes), stream(s.leafAccesses.toDouble, leafMisses, primOverhead, primHitBytes)))
+      else (Seq(beats), Seq(stream(s.nodeAccesses.toDouble + s.leafAccesses, nodeMisses + leafMisses, overhead, hitBytes)))
     // IUS clusters: each is the network above with TUS / IUS TUs, its own response port and a 1/IUS share of the
     // DRAM (the clusters are alike on average); the platform does IUS times one cluster's rays
     val k = p.ius
     require(tus % k == 0, s"TUS=$tus does not split evenly over IUS=$k intersection units")
-    val limit = Seq(tus / k, p.hw.iuOutstanding, p.hw.mcOutstanding).min
-    val (x, hol) = mvaInOrder(delay, dram * k, beats, stream, limit)
+    // rays with an access in flight: the IU's job FIFO and the MC's order FIFO (request), or a job FIFO per kind (path)
+    val limit = if (p.respByPath) math.min(tus / k, 2 * p.hw.iuOutstanding) else Seq(tus / k, p.hw.iuOutstanding, p.hw.mcOutstanding).min
+    val (x, hol) = mvaInOrder(delay, dram * k, ports, streams, limit)
     Prediction(latency, dram, beats, x * k, mva(delay, Seq(dram * k, beats), tus / k) * k, hol, limit)
   }
 }

@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import java.nio.file.{Path, Paths}
-import rtaccel.config.{BoxRange, CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Presets, TriTest}
+import rtaccel.config.{BoxRange, CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Presets, RespOrder, TriTest}
 import rtaccel.bvh.Mbvh
 import rtaccel.io.{InputError, Npy}
 import rtaccel.scene.{Normalize, Rays, Scene}
@@ -45,6 +45,7 @@ object Cli {
     val base = preset.copy(memory = gbps.fold(preset.memory)(g => preset.memory.copy(bytesPerSecond = g * 1e9)),
       clockMhz = mhz.getOrElse(preset.clockMhz))
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus), ius = a.int("ius", base.ius), memChannels = a.int("mem-channels", base.memChannels),
+      respByPath = a.opt("resp-order").map(RespOrder.parse).getOrElse(base.respByPath),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),

@@ -1,5 +1,7 @@
 package rtaccel.config
 
+import rtaccel.io.InputError
+
 /** Width of every field of a 32-bit-word child reference (paper Fig 2), generalised so that a
   * configuration can be fitted to a scene. Bit layout, MSB first:
   *   primitive (leaf): 1 | count-1 (countBits) | first primitive (primIndexBits)
@@ -28,6 +30,18 @@ final case class CacheParams(entries: Int = 0, ways: Int = 1, policy: CachePolic
   require(entries == 0 || Integer.bitCount(entries) == 1, s"cache entries must be a power of two (got $entries)")
   require(ways >= 1 && (entries == 0 || entries % ways == 0), s"cache ways ($ways) must divide entries ($entries)")
   require(maxLevel >= 0, s"MAX_LEVEL must be >= 0 (got $maxLevel)")
+}
+
+/** RESP_ORDER: the order in which the MC answers (PlatformParams.respByPath). */
+object RespOrder {
+  val Request = "request"
+  val Path = "path"
+  def parse(name: String): Boolean = name.toLowerCase match {
+    case Request => false
+    case Path => true
+    case _ => throw new InputError(s"RESP_ORDER=$name is not a response order; use $Request (one stream in request order, the paper's) or $Path (node and primitive streams, each in its own order)")
+  }
+  def name(byPath: Boolean): String = if (byPath) Path else Request
 }
 
 /** Fixed sizes of the hardware that no scene changes: bus widths, outstanding-request limits, queue depths,
@@ -94,7 +108,11 @@ final case class PlatformParams(
   primPacked: Boolean = false, // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (docs/numerics.md)
   triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // TRI_FORMAT: Möller–Trumbore's arithmetic, fp32 or wider (Numerics)
   ius: Int = 1, // IUS: intersection units, each with its own MC and caches and TUS / IUS TUs (docs/platform.md, "IU clusters")
-  memChannels: Int = 1 // MEM_CHANNELS: address-interleaved DRAM channels, each an AXI4 master with MEM_GBPS of its own
+  memChannels: Int = 1, // MEM_CHANNELS: address-interleaved DRAM channels, each an AXI4 master with MEM_GBPS of its own
+  // RESP_ORDER=path: the MC answers node and primitive requests in two streams, each in its own path's order, so a
+  // node hit never waits behind an older primitive miss (nor a primitive hit behind a node miss); request = one
+  // stream in global request order, the paper's design (docs/platform.md, "Response order")
+  respByPath: Boolean = false
 ) {
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
     s"TRI_FORMAT=${triFormat.name} is narrower than fp32; use fp32, fp64 or e<E>m<M> with E >= 8 and M >= 23")

@@ -10,6 +10,9 @@ import rtaccel.mc.{FetchBeat, FetchReq}
   * triangle pipelines, one node or one primitive per cycle. Results are broadcast to the TUs (each TU has
   * at most one request outstanding and always takes its results, so the pipelines never stall).
   * Memory requests are issued ahead while earlier data is still arriving, up to `maxOutstanding`.
+  * RESP_ORDER=request: one job FIFO and one collection follow the MC's single in-order stream.
+  * RESP_ORDER=path: a job FIFO and a collection per kind (nodes, leaves), each fed by its own MC stream, so a
+  * node's box test never waits for an older leaf's data; up to `maxOutstanding` jobs of each kind.
   */
 class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extends Module {
   private val maxOutstanding = p.hw.iuOutstanding
@@ -19,7 +22,8 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     val tri = Valid(new TriResult(p))
     val mem = new Bundle {
       val req = Decoupled(new FetchReq)
-      val resp = Flipped(Decoupled(new FetchBeat(beatBits)))
+      val resp = Flipped(Decoupled(new FetchBeat(beatBits))) // RESP_ORDER=path: node beats only
+      val primResp = if (p.respByPath) Some(Flipped(Decoupled(new FetchBeat(beatBits)))) else None // RESP_ORDER=path
     }
   })
   private val beatWords = beatBits / 32
@@ -38,81 +42,101 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     val tmax = UInt(32.W)
     val ray = new RayData
   }
-  val jobs = Module(new Queue(new Job, maxOutstanding))
+  // one FIFO for every job (RESP_ORDER=request), or FIFO 0 for nodes and FIFO 1 for leaves (RESP_ORDER=path)
+  val jobQs = Seq.fill(if (p.respByPath) 2 else 1)(Module(new Queue(new Job, maxOutstanding)))
   val r = arb.io.out.bits
-  io.mem.req.valid := arb.io.out.valid && jobs.io.enq.ready
+  val reqIsLeaf = r.cref(primFlagBit)
+  val jobReady = if (p.respByPath) Mux(reqIsLeaf, jobQs(1).io.enq.ready, jobQs(0).io.enq.ready) else jobQs(0).io.enq.ready
+  io.mem.req.valid := arb.io.out.valid && jobReady
   io.mem.req.bits.childRef := r.cref
-  jobs.io.enq.valid := arb.io.out.valid && io.mem.req.ready
-  jobs.io.enq.bits.tu := r.tu
-  jobs.io.enq.bits.isLeaf := r.cref(primFlagBit)
-  jobs.io.enq.bits.lastPrim := (if (p.refs.countBits == 0) 0.U else r.cref(p.refs.primIndexBits + p.refs.countBits - 1, p.refs.primIndexBits))
-  jobs.io.enq.bits.tmax := r.tmax
-  jobs.io.enq.bits.ray := r.ray
-  arb.io.out.ready := io.mem.req.ready && jobs.io.enq.ready
+  for ((q, i) <- jobQs.zipWithIndex) {
+    val mine = if (p.respByPath) reqIsLeaf === (i == 1).B else true.B
+    q.io.enq.valid := arb.io.out.valid && io.mem.req.ready && mine
+    q.io.enq.bits.tu := r.tu
+    q.io.enq.bits.isLeaf := reqIsLeaf
+    q.io.enq.bits.lastPrim := (if (p.refs.countBits == 0) 0.U else r.cref(p.refs.primIndexBits + p.refs.countBits - 1, p.refs.primIndexBits))
+    q.io.enq.bits.tmax := r.tmax
+    q.io.enq.bits.ray := r.ray
+  }
+  arb.io.out.ready := io.mem.req.ready && jobReady
 
-  // ---- collection: beats in request order become whole nodes or whole primitives
-  val job = jobs.io.deq.bits
-  val isLeaf = job.isLeaf
-  val buf = Reg(Vec(math.max(nodeWords, primWords), UInt(32.W)))
-  val beatIdx = RegInit(0.U(8.W))
-  // a unit (node or primitive) is bad if any of its beats came with a memory error
-  val errAcc = RegInit(false.B)
-  val unitErr = errAcc || io.mem.resp.bits.err
-  val primIdx = RegInit(0.U(8.W))
-  io.mem.resp.ready := jobs.io.deq.valid
-  val unitBeats = Mux(isLeaf, (primWords / beatWords).U, (nodeWords / beatWords).U)
-  // PRIM_FORMAT=packed: a leaf's beats go to the LeafAssembler (its records span beats), not to this collection
-  val packedLeaf = p.primPacked.B && isLeaf
-  val beatFire = io.mem.resp.fire && !packedLeaf
-  val unitDone = beatFire && beatIdx === unitBeats - 1.U
-  val jobDone = unitDone && (!isLeaf || primIdx === job.lastPrim)
-  // the words of the unit as they will be once this beat is stored (the last beat goes straight through)
-  val words = Wire(Vec(buf.length, UInt(32.W)))
-  for (w <- buf.indices) {
-    val thisBeat = (w / beatWords).U === beatIdx
-    words(w) := Mux(thisBeat, io.mem.resp.bits.data((w % beatWords) * 32 + 31, (w % beatWords) * 32), buf(w))
+  /** Collection: the beats of `beats`, in the order of the jobs of `jobs`, become whole nodes (to the box
+    * pipe) or whole primitives (to the triangle pipe). `only` = Some(leaf) when every job is of one kind
+    * (RESP_ORDER=path): the other kind's logic is then constant and elaborates away.
+    */
+  def collect(jobs: DecoupledIO[Job], beats: DecoupledIO[FetchBeat], only: Option[Boolean]): (Valid[BoxJob], Valid[TriJob]) = {
+    val job = jobs.bits
+    val isLeaf = only.fold(job.isLeaf)(_.B)
+    val buf = Reg(Vec(math.max(nodeWords, primWords), UInt(32.W)))
+    val beatIdx = RegInit(0.U(8.W))
+    // a unit (node or primitive) is bad if any of its beats came with a memory error
+    val errAcc = RegInit(false.B)
+    val unitErr = errAcc || beats.bits.err
+    val primIdx = RegInit(0.U(8.W))
+    beats.ready := jobs.valid
+    val unitBeats = Mux(isLeaf, (primWords / beatWords).U, (nodeWords / beatWords).U)
+    // PRIM_FORMAT=packed: a leaf's beats go to the LeafAssembler (its records span beats), not to this collection
+    val packedLeaf = p.primPacked.B && isLeaf
+    val beatFire = beats.fire && !packedLeaf
+    val unitDone = beatFire && beatIdx === unitBeats - 1.U
+    val jobDone = unitDone && (!isLeaf || primIdx === job.lastPrim)
+    // the words of the unit as they will be once this beat is stored (the last beat goes straight through)
+    val words = Wire(Vec(buf.length, UInt(32.W)))
+    for (w <- buf.indices) {
+      val thisBeat = (w / beatWords).U === beatIdx
+      words(w) := Mux(thisBeat, beats.bits.data((w % beatWords) * 32 + 31, (w % beatWords) * 32), buf(w))
+    }
+    when(beatFire) {
+      buf := words
+      errAcc := unitErr && !unitDone
+      beatIdx := Mux(unitDone, 0.U, beatIdx + 1.U)
+      when(unitDone && isLeaf) { primIdx := Mux(jobDone, 0.U, primIdx + 1.U) }
+    }
+    jobs.ready := jobDone
+
+    val node = Wire(new NodeJob(p))
+    node.tu := job.tu
+    node.ray := job.ray
+    node.tmax := job.tmax
+    node.words := VecInit(words.take(nodeWords))
+    node.err := unitErr
+    val box = NodeDecode.toBoxJob(p, unitDone && !isLeaf, node)
+    val tri = Wire(Valid(new TriJob(p)))
+    tri.valid := unitDone && isLeaf
+    tri.bits.tu := job.tu
+    tri.bits.ray := job.ray
+    tri.bits.tmax := job.tmax
+    tri.bits.words := VecInit(words.take(10))
+    tri.bits.last := jobDone
+    tri.bits.err := unitErr
+    if (p.primPacked && !only.contains(false)) {
+      val asm = Module(new LeafAssembler(p, beatBits))
+      asm.io.in.valid := beats.valid && jobs.valid && isLeaf
+      asm.io.in.bits.beat := beats.bits
+      asm.io.in.bits.lastPrim := job.lastPrim
+      asm.io.in.bits.ctx.tu := job.tu
+      asm.io.in.bits.ctx.ray := job.ray
+      asm.io.in.bits.ctx.tmax := job.tmax
+      beats.ready := jobs.valid && (!isLeaf || asm.io.in.ready)
+      jobs.ready := Mux(isLeaf, asm.io.leafTaken, jobDone)
+      tri.valid := asm.io.out.valid
+      tri.bits := asm.io.out.bits
+    }
+    (box, tri)
   }
-  when(beatFire) {
-    buf := words
-    errAcc := unitErr && !unitDone
-    beatIdx := Mux(unitDone, 0.U, beatIdx + 1.U)
-    when(unitDone && isLeaf) { primIdx := Mux(jobDone, 0.U, primIdx + 1.U) }
-  }
-  jobs.io.deq.ready := jobDone
+
+  val (boxIn, triJob) =
+    if (!p.respByPath) collect(jobQs(0).io.deq, io.mem.resp, None)
+    else (collect(jobQs(0).io.deq, io.mem.resp, Some(false))._1, collect(jobQs(1).io.deq, io.mem.primResp.get, Some(true))._2)
 
   val boxPipe = Module(new BoxPipe(p))
-  val node = Wire(new NodeJob(p))
-  node.tu := job.tu
-  node.ray := job.ray
-  node.tmax := job.tmax
-  node.words := VecInit(words.take(nodeWords))
-  node.err := unitErr
-  boxPipe.io.in := NodeDecode.toBoxJob(p, unitDone && !isLeaf, node)
+  boxPipe.io.in := boxIn
   // TRI_TEST: both pipes take the same job and give the same result, at their own latencies
   val (triIn, triOut) = p.triTest match {
     case TriTest.Mt => val t = Module(new TriPipe(p)); (t.io.in, t.io.out)
     case TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.io.in, t.io.out)
   }
-  triIn.valid := unitDone && isLeaf
-  triIn.bits.tu := job.tu
-  triIn.bits.ray := job.ray
-  triIn.bits.tmax := job.tmax
-  triIn.bits.words := VecInit(words.take(10))
-  triIn.bits.last := jobDone
-  triIn.bits.err := unitErr
-  if (p.primPacked) {
-    val asm = Module(new LeafAssembler(p, beatBits))
-    asm.io.in.valid := io.mem.resp.valid && jobs.io.deq.valid && isLeaf
-    asm.io.in.bits.beat := io.mem.resp.bits
-    asm.io.in.bits.lastPrim := job.lastPrim
-    asm.io.in.bits.ctx.tu := job.tu
-    asm.io.in.bits.ctx.ray := job.ray
-    asm.io.in.bits.ctx.tmax := job.tmax
-    io.mem.resp.ready := jobs.io.deq.valid && (!isLeaf || asm.io.in.ready)
-    jobs.io.deq.ready := Mux(isLeaf, asm.io.leafTaken, jobDone)
-    triIn.valid := asm.io.out.valid
-    triIn.bits := asm.io.out.bits
-  }
+  triIn := triJob
   io.box := boxPipe.io.out
   io.tri := triOut
 }

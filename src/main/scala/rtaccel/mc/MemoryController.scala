@@ -179,7 +179,9 @@ class BurstSplitter(g: McGeometry, id: Int = 0) extends Module {
   * leave in global request order whatever the paths do. The paths' DRAM reads share one AXI AR port through
   * an arbiter; a second FIFO records which path each DRAM read belongs to and routes R beats back
   * (in-order AXI, one ID). Backpressure on io.resp reaches R.ready combinationally.
-  * Up to maxOutstanding requests may be in flight. pathFactory(g, FetchPath.Node | FetchPath.Prim) builds the
+  * RESP_ORDER=path (p.respByPath): no order FIFO; io.resp carries the node path's beats and io.primResp the
+  * primitive path's, each in its own request order, so neither stream waits on the other's misses.
+  * Up to maxOutstanding requests may be in flight (RESP_ORDER=request). pathFactory(g, FetchPath.Node | FetchPath.Prim) builds the
   * two paths (default: pass-through); a cache is plugged in by passing a factory that returns it.
   *
   * respBufferBeats = 0 (default, enough for the pass-through paths, whose DRAM order is the request order):
@@ -197,7 +199,10 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   private val maxOutstanding = p.hw.mcOutstanding
   val io = IO(new Bundle {
     val req = Flipped(Decoupled(new FetchReq))
+    // RESP_ORDER=request: every response, in request order; RESP_ORDER=path: the node path's responses only
     val resp = Decoupled(new FetchBeat(ap.dataBits))
+    // RESP_ORDER=path: the primitive path's responses, in primitive request order
+    val primResp = if (p.respByPath) Some(Decoupled(new FetchBeat(ap.dataBits))) else None
     val primBase = Input(UInt(ap.addrBits.W))
     val maxLevel = Input(UInt(p.hw.levelCodeBits.W)) // MAX_LEVEL register of the level replacement policy
     val clearCounters = Input(Bool()) // zeroes the counters below and every path's cache statistics
@@ -205,6 +210,9 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     val counters = Output(new McCounters)
   })
   val f = p.refs
+  // the two streams drain independently, so an R beat for a stream that waits must have room to land
+  require(!p.respByPath || respBufferBeats > 0,
+    "RESP_ORDER=path drains the node and primitive streams independently; give the MC respBufferBeats > 0")
   require(respBufferBeats == 0 || respBufferBeats >= g.maxBeats,
     s"a response buffer of $respBufferBeats beats cannot hold the largest fetch (${g.maxBeats} beats); raise respBufferBeats")
   private val NodePath = FetchPath.Node
@@ -228,16 +236,21 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     else { val l = ref(f.nodeIdBits + f.levelBits - 1, f.nodeIdBits); Mux(l > maxCode.U, maxCode.U, l)(codeBits - 1, 0) }
 
   // ---- paths and dispatch (order FIFO: path of every request in flight)
+  // RESP_ORDER=path keeps no order FIFO: each path answers its own requests in order, and what bounds the
+  // requests in flight is the requester (the IU's job FIFOs) and each path's own queues
   val paths = Seq.tabulate(2)(i => Module(pathFactory(g, i)))
-  val order = Module(new Queue(UInt(1.W), maxOutstanding))
+  val order = if (p.respByPath) None else Some(Module(new Queue(UInt(1.W), maxOutstanding)))
+  val orderReady = order.fold(true.B)(_.io.enq.ready)
 
   val target = Mux(isLeaf, PrimPath.U, NodePath.U)
   val pathReady = Mux(isLeaf, paths(PrimPath).io.in.ready, paths(NodePath).io.in.ready)
-  io.req.ready := pathReady && order.io.enq.ready
-  order.io.enq.valid := io.req.valid && pathReady
-  order.io.enq.bits := target
+  io.req.ready := pathReady && orderReady
+  for (o <- order) {
+    o.io.enq.valid := io.req.valid && pathReady
+    o.io.enq.bits := target
+  }
   for ((path, i) <- paths.zipWithIndex) {
-    path.io.in.valid := io.req.valid && order.io.enq.ready && target === i.U
+    path.io.in.valid := io.req.valid && orderReady && target === i.U
     path.io.in.bits.addr := (if (i == NodePath) nodeAddr else primAddr)
     path.io.in.bits.beats := (if (i == NodePath) g.nodeBeats.U else g.leaf.beats(count))
     path.io.in.bits.line := (if (i == NodePath) nodeId else first).pad(32)
@@ -296,13 +309,19 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   memOrder.io.deq.ready := io.axi.r.fire && rLast
   when(io.axi.r.fire) { rBeat := Mux(rLast, 0.U, rBeat + 1.U) }
 
-  // ---- response mux in global request order
-  val sel = order.io.deq.bits
-  val outs = VecInit(paths.map(_.io.out.bits))
-  io.resp.valid := order.io.deq.valid && VecInit(paths.map(_.io.out.valid))(sel)
-  io.resp.bits := outs(sel)
-  for ((path, i) <- paths.zipWithIndex) path.io.out.ready := io.resp.ready && order.io.deq.valid && sel === i.U
-  order.io.deq.ready := io.resp.fire && io.resp.bits.last
+  // ---- responses: one stream in global request order (the order FIFO picks the path), or one per path
+  order match {
+    case Some(o) =>
+      val sel = o.io.deq.bits
+      val outs = VecInit(paths.map(_.io.out.bits))
+      io.resp.valid := o.io.deq.valid && VecInit(paths.map(_.io.out.valid))(sel)
+      io.resp.bits := outs(sel)
+      for ((path, i) <- paths.zipWithIndex) path.io.out.ready := io.resp.ready && o.io.deq.valid && sel === i.U
+      o.io.deq.ready := io.resp.fire && io.resp.bits.last
+    case None =>
+      io.resp <> paths(NodePath).io.out
+      io.primResp.get <> paths(PrimPath).io.out
+  }
 
   // ---- counters
   def counter(inc: UInt, en: Bool): UInt = {

@@ -49,7 +49,7 @@ object RtAccelTop {
         "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
         "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
       Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
-        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong))
+        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L)))
   }
 }
 
@@ -83,7 +83,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   // caches reorder DRAM traffic between the paths: give each path a response buffer (see MemoryController);
   // with several clusters the buffers also keep one cluster's R beats from waiting on another's
   val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
-    respBufferBeats = if (cached || p.ius > 1 || p.memChannels > 1) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
+    respBufferBeats = if (cached || p.ius > 1 || p.memChannels > 1 || p.respByPath) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
   regs.io.lite <> io.lite
@@ -112,6 +112,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   for ((iu, mc) <- ius.zip(mcs)) {
     mc.io.req <> iu.io.mem.req
     iu.io.mem.resp <> mc.io.resp
+    for ((i, m) <- iu.io.mem.primResp.zip(mc.io.primResp)) i <> m // RESP_ORDER=path
     mc.io.primBase := regs.io.primBase
     mc.io.maxLevel := regs.io.maxLevel
     mc.io.clearCounters := regs.io.clearCounters
@@ -144,7 +145,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     "cycles" -> 1.U, "batch_cycles" -> ev(regs.io.running), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
     "stall_iu_arbitration" -> ev(PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready))),
     "stall_memory_request" -> ev(PopCount(memPorts.map(m => m.ar.valid && !m.ar.ready))),
-    "stall_memory_data" -> ev(PopCount(ius.map(iu => iu.io.mem.resp.ready && !iu.io.mem.resp.valid))),
+    // an IU waits for data when one of its collections has a job and no beat (RESP_ORDER=path: either stream)
+    "stall_memory_data" -> ev(PopCount(ius.map(iu => (iu.io.mem.resp +: iu.io.mem.primResp.toSeq).map(r => r.ready && !r.valid).reduce(_ || _)))),
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
     "tu_busy_cycles" -> ev(PopCount(tuBusy)))
   for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := events(n)

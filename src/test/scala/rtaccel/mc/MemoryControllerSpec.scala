@@ -36,6 +36,7 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
   val io = IO(new Bundle {
     val req = Flipped(chisel3.util.Decoupled(new FetchReq))
     val resp = chisel3.util.Decoupled(new FetchBeat(axi.dataBits))
+    val primResp = if (p.respByPath) Some(chisel3.util.Decoupled(new FetchBeat(axi.dataBits))) else None
     val primBase = Input(UInt(axi.addrBits.W))
     val maxLevel = Input(UInt(4.W))
     val counters = Output(new McCounters)
@@ -44,16 +45,20 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
     val badBurst = Output(Bool())
     val overtaken = Output(UInt(32.W))
   })
-  // Cycles in which DRAM delivers a beat for a different path than the one the response mux waits on.
+  // Cycles in which DRAM delivers a beat for a different path than the one the response mux waits on
+  // (RESP_ORDER=request; with RESP_ORDER=path there is no single awaited path, and the count stays 0).
   import chisel3.util.experimental.BoringUtils
-  val orderValid = BoringUtils.bore(mc.order.io.deq.valid)
-  val orderPath = BoringUtils.bore(mc.order.io.deq.bits)
-  val memPath = BoringUtils.bore(mc.memOrder.io.deq.bits.path)
   val overtaken = RegInit(0.U(32.W))
-  when(mc.io.axi.r.fire && orderValid && orderPath =/= memPath) { overtaken := overtaken + 1.U }
+  for (o <- mc.order) {
+    val orderValid = BoringUtils.bore(o.io.deq.valid)
+    val orderPath = BoringUtils.bore(o.io.deq.bits)
+    val memPath = BoringUtils.bore(mc.memOrder.io.deq.bits.path)
+    when(mc.io.axi.r.fire && orderValid && orderPath =/= memPath) { overtaken := overtaken + 1.U }
+  }
   io.overtaken := overtaken
   mc.io.req <> io.req
   io.resp <> mc.io.resp
+  for ((h, m) <- io.primResp.zip(mc.io.primResp)) h <> m
   mc.io.primBase := io.primBase
   mc.io.maxLevel := io.maxLevel
   mc.io.clearCounters := false.B
@@ -80,6 +85,10 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
   import MemTestImages._
 
   /** Every fetchable ref of the image: the root (ref 0 = node 0) and every non-empty child. */
+  /** RESP_ORDER=path: node beats of the running case that left while an older leaf was still unanswered (set
+    * before afterRun, which may check it). */
+  var overtakes = 0
+
   def allRefs(img: MemoryImage): IndexedSeq[Int] =
     0 +: (for (n <- 0 until img.numNodes; j <- 0 until img.p.m if img.childRef(n, j) != 0) yield img.childRef(n, j))
 
@@ -89,11 +98,11 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               respBufferBeats: Int = 0, maxCycles: Int = 30000, maxLevel: Int = 15,
               pick: (Random, IndexedSeq[Int]) => Int = (r, pool) => pool(r.nextInt(pool.length)),
               afterRun: (McHarness, Seq[Int], MemoryImage) => Unit = (_, _, _) => (),
-              annotations: firrtl2.AnnotationSeq = Seq()): Unit =
+              annotations: firrtl2.AnnotationSeq = Seq(), respByPath: Boolean = false): Unit =
     it should name in {
       val axi = AxiParams(dataBits = dataBits)
       val img = image(seed, tris, refFormat)
-      val p = img.p
+      val p = img.p.copy(respByPath = respByPath)
       val codec = new RefCodec(p.refs)
       val hex = Files.createTempDirectory("mc").resolve("img.hex").toAbsolutePath
       val lay = ImageFile.write(img, axi, hex)
@@ -104,36 +113,51 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
       def span(ref: Int): (Long, Int) =
         if (codec.isPrim(ref)) (lay.primBaseBytes + 64L * codec.firstPrim(ref), 64 * codec.count(ref))
         else (codec.nodeId(ref).toLong * p.nodeStrideBytes, p.nodeStrideBytes)
-      val expected = refs.flatMap { ref =>
-        val (a, n) = span(ref); val k = n / axi.beatBytes
-        (0 until k).map(i => (beat(bytes, a + i * axi.beatBytes, axi), i == k - 1))
+      // each beat with the index of the request it answers
+      def beatsOf(ix: Seq[Int]) = ix.flatMap { j =>
+        val (a, n) = span(refs(j)); val k = n / axi.beatBytes
+        (0 until k).map(i => ((beat(bytes, a + i * axi.beatBytes, axi), i == k - 1), j))
       }
+      // RESP_ORDER=request: one stream of every beat in request order; path: node beats and leaf beats, each in
+      // its own request order
+      val (leafIx, nodeIx) = refs.indices.partition(j => codec.isPrim(refs(j)))
+      val streams = if (respByPath) Seq(beatsOf(nodeIx), beatsOf(leafIx)) else Seq(beatsOf(refs.indices))
+      val expected = streams.flatten.map(_._1)
       test(new McHarness(p, axi, lay.words, hex.toString, cfg, pathFactory, respBufferBeats)).withAnnotations(annotations) { dut =>
         dut.clock.setTimeout(0)
         dut.io.primBase.poke(lay.primBaseBytes.U)
         dut.io.maxLevel.poke(maxLevel.U)
-        val got = ArrayBuffer[(BigInt, Boolean)]()
+        val ports = dut.io.resp +: dut.io.primResp.toSeq
+        val got = streams.map(_ => ArrayBuffer[(BigInt, Boolean)]())
+        val done = Array.fill(refs.length)(false)
         var next = 0; var presenting = false; var cyc = 0
         var maxOutstanding = 0
-        while (got.length < expected.length) {
-          assert(cyc < maxCycles, s"timeout after ${got.length}/${expected.length} beats")
+        var overtook = 0 // node beats that left while an older leaf was unanswered (RESP_ORDER=path)
+        while (got.map(_.length).sum < expected.length) {
+          assert(cyc < maxCycles, s"timeout after ${got.map(_.length).sum}/${expected.length} beats")
           if (!presenting && next < refs.length && r.nextDouble() < reqProb) presenting = true
           dut.io.req.valid.poke(presenting.B)
           if (presenting) dut.io.req.bits.childRef.poke((refs(next) & 0xffffffffL).U)
-          val ready = r.nextDouble() < readyProb
-          dut.io.resp.ready.poke(ready.B)
-          if (ready && dut.io.resp.valid.peek().litToBoolean) {
-            val b = (dut.io.resp.bits.data.peek().litValue, dut.io.resp.bits.last.peek().litToBoolean)
-            val i = got.length
-            assert(b == expected(i), s"beat $i (cycle $cyc) differs")
-            got += b
+          for (((port, g), k) <- ports.zip(got).zipWithIndex) {
+            val ready = r.nextDouble() < readyProb
+            port.ready.poke(ready.B)
+            if (ready && port.valid.peek().litToBoolean) {
+              val b = (port.bits.data.peek().litValue, port.bits.last.peek().litToBoolean)
+              val i = g.length
+              assert(i < streams(k).length, s"stream $k: a beat after its last expected one (cycle $cyc)")
+              val (want, j) = streams(k)(i)
+              assert(b == want, s"stream $k beat $i (request $j, cycle $cyc) differs")
+              g += b
+              if (b._2) done(j) = true
+              if (k == 0 && respByPath && leafIx.exists(l => l < j && !done(l))) overtook += 1
+            }
           }
           if (presenting && dut.io.req.ready.peek().litToBoolean) { presenting = false; next += 1 }
-          maxOutstanding = math.max(maxOutstanding, next - got.count(_._2))
+          maxOutstanding = math.max(maxOutstanding, next - done.count(identity))
           dut.clock.step(); cyc += 1
         }
         dut.clock.step(5)
-        assert(!dut.io.resp.valid.peek().litToBoolean, "extra beats after the last expected one")
+        for (port <- ports) assert(!port.valid.peek().litToBoolean, "extra beats after the last expected one")
         val leaves = refs.filter(codec.isPrim)
         val prims = leaves.map(codec.count).sum
         val totalBytes = refs.map(span(_)._2.toLong).sum
@@ -151,6 +175,8 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
         val overtaken = dut.io.overtaken.peek().litValue
         info(s"$overtaken beats arrived for the other path than the one awaited")
         if (pathFactory eq FetchPath.passThrough) assert(overtaken == 0)
+        if (respByPath) info(s"$overtook node beats left ahead of an older unanswered leaf")
+        overtakes = overtook
         afterRun(dut, refs, img)
       }
     }
@@ -191,4 +217,22 @@ class MemoryControllerSpec extends McCases {
     readyProb = 0.5, seed = 24, respBufferBeats = 40, maxCycles = 6000,
     pathFactory = (g, i) => if (i == FetchPath.Node) new StallingPath(g, 0x5a) else new FetchPath(g),
     afterRun = (dut, _, _) => assert(dut.io.overtaken.peek().litValue > 0, "the stalling path did not reorder DRAM traffic"))
+
+  behavior of "MemoryController with RESP_ORDER=path"
+
+  // Two streams, each checked beat by beat against the image in its own request order, with independent
+  // random backpressure; a stalling primitive path holds leaves back, and node beats must then leave ahead of
+  // older leaves (what RESP_ORDER=request forbids), else the knob would change nothing.
+  runCase("answer nodes and leaves in two streams, each in its own order (stalling primitive path)",
+    dataBits = 256, tris = 300, nReqs = 80, DramConfig(8, 8, 1, randomExtraLatency = 5), reqProb = 0.9,
+    readyProb = 0.5, seed = 25, respBufferBeats = 40, maxCycles = 6000, respByPath = true,
+    pathFactory = (g, i) => if (i == FetchPath.Prim) new StallingPath(g, 0x3c) else new FetchPath(g),
+    afterRun = (_, _, _) => assert(overtakes > 0, "no node beat left ahead of an older leaf: the streams are not independent"))
+  runCase("answer both streams under a saturated DRAM (pass-through paths, paper timing)", dataBits = 256, tris = 300,
+    nReqs = 100, DramConfig.paper, reqProb = 1.0, readyProb = 0.7, seed = 26, respBufferBeats = 16, respByPath = true)
+  it should "refuse RESP_ORDER=path without response buffers" in {
+    val e = intercept[IllegalArgumentException](_root_.circt.stage.ChiselStage.emitCHIRRTL(
+      new MemoryController(rtaccel.config.Presets.paper2017.copy(respByPath = true), AxiParams())))
+    assert(e.getMessage.contains("respBufferBeats"))
+  }
 }
