@@ -19,7 +19,7 @@ object IntersectionUnitSpec {
   final case class TriExp(tu: Int, hit: Boolean, t: Int, u: Int, v: Int, prim: Int, last: Boolean, err: Boolean, what: String)
   final case class Req(cref: Int, tmax: Float, r: PreparedRay)
   final case class Stats(requests: Int, nodes: Int, prims: Int, boxHits: Int, triHits: Int, badNodes: Int, badPrims: Int,
-                         mixedLeaves: Int, maxOutstanding: Int, cycles: Long)
+                         mixedLeaves: Int, maxOutstanding: Int, cycles: Long, overtakes: Int = 0)
 }
 
 /** The intersection unit top with several TU request ports and the memory side played by the test: each
@@ -38,7 +38,7 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   private def sim(p: PlatformParams, beatBits: Int) = {
     val r = p.refs
     Seq(VerilatorBackendAnnotation, VerilatorCFlags(Seq("-O1")), CachingAnnotation, TargetDirAnnotation(
-      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}"))
+      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}${if (p.respByPath) "-rpath" else ""}"))
   }
 
   private def soupImage(seed: Long, p0: PlatformParams, fit: Boolean): MemoryImage = {
@@ -47,9 +47,11 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     MemoryImage.pack(bvh, s, if (fit) Fit.fitTo(p0, bvh) else p0)
   }
 
-  /** Random traffic on the IU; `errPercent` of the memory beats come back with err. */
-  private def run(img: MemoryImage, beatBits: Int, requests: Int, seed: Long, errPercent: Int): Stats = {
-    val p = img.p
+  /** Random traffic on the IU; `errPercent` of the memory beats come back with err. respByPath (RESP_ORDER=path):
+    * node beats and leaf beats come on their own ports, each in its own request order, the leaves' slower, so that
+    * node beats are taken ahead of older leaves' (counted in Stats.overtakes). */
+  private def run(img: MemoryImage, beatBits: Int, requests: Int, seed: Long, errPercent: Int, respByPath: Boolean = false): Stats = {
+    val p = img.p.copy(respByPath = respByPath)
     val rnd = new Random(seed)
     val codec = new RefCodec(p.refs)
     val m = p.m
@@ -68,16 +70,18 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
       val tuWait = Array.fill(p.tus)(0)                     // results still owed to the TU
       val tuNext = Array.fill(p.tus)(0L)                    // earliest cycle of its next request
       val boxQ = mutable.Queue[BoxExp](); val triQ = mutable.Queue[TriExp]()
-      val beats = mutable.Queue[(BigInt, Boolean, Boolean)]() // data, last, err
-      var beatAt = 0L; var beatShown = false
+      // per response port (RESP_ORDER=path: 0 nodes, 1 leaves): beats owed, cycle of the next, one shown
+      val ports = dut.io.mem.resp +: dut.io.mem.primResp.toSeq
+      val beatQs = ports.map(_ => mutable.Queue[(BigInt, Boolean, Boolean, Int)]()) // data, last, err, request number
+      val beatAt = Array.fill(ports.length)(0L); val beatShown = Array.fill(ports.length)(false)
       var issued = 0
       var lastProgress = 0L // cycle of the last result
       for (i <- 0 until p.tus) dut.io.req(i).valid.poke(false.B)
-      dut.io.mem.req.ready.poke(false.B); dut.io.mem.resp.valid.poke(false.B)
+      dut.io.mem.req.ready.poke(false.B); for (port <- ports) port.valid.poke(false.B)
       var lastMemReady = false
       while (issued < requests || tuWait.exists(_ > 0) || tuReq.exists(_.nonEmpty)) {
-        if (cycle > lastProgress + 5000) fail(s"stuck: ${boxQ.length} box and ${triQ.length} triangle results owed, ${beats.length} beats " +
-          s"unsent (one shown: $beatShown, taken: ${dut.io.mem.resp.ready.peek().litToBoolean}), TUs owed ${tuWait.mkString(",")}, " +
+        if (cycle > lastProgress + 5000) fail(s"stuck: ${boxQ.length} box and ${triQ.length} triangle results owed, ${beatQs.map(_.length).sum} beats " +
+          s"unsent (shown: ${beatShown.mkString(",")}, taken: ${ports.map(_.ready.peek().litToBoolean).mkString(",")}), TUs owed ${tuWait.mkString(",")}, " +
           s"presenting ${tuReq.map(_.nonEmpty).mkString(",")}")
         // ---- TU ports: a new request when idle, held until taken
         for (i <- 0 until p.tus) if (tuReq(i).isEmpty && tuWait(i) == 0 && cycle >= tuNext(i) && issued < requests) {
@@ -113,11 +117,11 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
         // ---- memory side
         val memReady = rnd.nextInt(4) != 0
         if (memReady != lastMemReady) { dut.io.mem.req.ready.poke(memReady.B); lastMemReady = memReady }
-        val showBeat = beats.nonEmpty && cycle >= beatAt
-        if (showBeat && !beatShown) {
-          val (d, last, err) = beats.head
-          dut.io.mem.resp.bits.data.poke(d.U(beatBits.W)); dut.io.mem.resp.bits.last.poke(last.B); dut.io.mem.resp.bits.err.poke(err.B)
-          dut.io.mem.resp.valid.poke(true.B); beatShown = true
+        val showBeat = ports.indices.map(k => beatQs(k).nonEmpty && cycle >= beatAt(k))
+        for ((port, k) <- ports.zipWithIndex) if (showBeat(k) && !beatShown(k)) {
+          val (d, last, err, _) = beatQs(k).head
+          port.bits.data.poke(d.U(beatBits.W)); port.bits.last.poke(last.B); port.bits.err.poke(err.B)
+          port.valid.poke(true.B); beatShown(k) = true
         }
         // ---- observe
         val memReqValid = dut.io.mem.req.valid.peek().litToBoolean
@@ -135,7 +139,7 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
           val bad = Seq.fill(nBeats)(rnd.nextInt(100) < errPercent)
           for (b <- 0 until nBeats) {
             val data = (0 until beatWords).map(w => u32(words(b * beatWords + w)) << (32 * w)).sum
-            beats.enqueue((if (bad(b)) data ^ ((BigInt(1) << beatBits) - 1) else data, b == nBeats - 1, bad(b)))
+            beatQs(if (respByPath && codec.isPrim(ref)) 1 else 0).enqueue((if (bad(b)) data ^ ((BigInt(1) << beatBits) - 1) else data, b == nBeats - 1, bad(b), st.requests))
           }
           def unitBad(u: Int, unitWords: Int) = (u * unitWords / beatWords until (u + 1) * unitWords / beatWords).exists(bad)
           val what = f"TU $i ref 0x$ref%08x"
@@ -167,9 +171,11 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
           st = st.copy(requests = st.requests + 1, maxOutstanding = math.max(st.maxOutstanding, tuWait.count(_ > 0)))
           tuReq(i) = None
         } else if (fired.nonEmpty) fail(s"TU ports ${fired.mkString(",")} taken without a memory request")
-        if (showBeat && dut.io.mem.resp.ready.peek().litToBoolean) {
-          beats.dequeue(); beatShown = false
-          beatAt = cycle + 1 + (if (rnd.nextInt(3) == 0) rnd.nextInt(8) else 0)
+        for ((port, k) <- ports.zipWithIndex) if (showBeat(k) && port.ready.peek().litToBoolean) {
+          val taken = beatQs(k).dequeue(); beatShown(k) = false
+          if (k == 0 && beatQs.length > 1 && beatQs(1).headOption.exists(_._4 < taken._4)) st = st.copy(overtakes = st.overtakes + 1)
+          // RESP_ORDER=path: the leaf port is the slow one (a primitive miss), so that nodes overtake
+          beatAt(k) = cycle + 1 + (if (rnd.nextInt(3) == 0) rnd.nextInt(8) else 0) + (if (k == 1) rnd.nextInt(12) else 0)
         }
         if (dut.io.box.valid.peek().litToBoolean) {
           if (boxQ.isEmpty) fail("a box result nobody asked for")
@@ -202,13 +208,13 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
         }
         dut.clock.step(); cycle += 1
         // deassert what was taken at this edge
-        if (!beatShown) dut.io.mem.resp.valid.poke(false.B)
+        for ((port, k) <- ports.zipWithIndex) if (!beatShown(k)) port.valid.poke(false.B)
         for (i <- 0 until p.tus) if (tuReq(i).isEmpty) dut.io.req(i).valid.poke(false.B)
       }
       for (_ <- 0 until 40) { // nothing more comes out
         dut.io.box.valid.expect(false.B); dut.io.tri.valid.expect(false.B); dut.io.mem.req.valid.expect(false.B); dut.clock.step()
       }
-      assert(boxQ.isEmpty && triQ.isEmpty && beats.isEmpty)
+      assert(boxQ.isEmpty && triQ.isEmpty && beatQs.forall(_.isEmpty))
       st = st.copy(cycles = cycle)
     }
     st
@@ -217,7 +223,7 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   private def report(s: Stats): String =
     s"${s.requests} requests (${s.nodes} nodes, ${s.prims} primitives), ${s.boxHits} child hits, ${s.triHits} triangle hits, " +
       s"${s.badNodes} poisoned nodes, ${s.badPrims} poisoned primitives (${s.mixedLeaves} leaves part poisoned), " +
-      s"up to ${s.maxOutstanding} requests outstanding, ${s.cycles} cycles"
+      s"up to ${s.maxOutstanding} requests outstanding, ${s.cycles} cycles, ${s.overtakes} node beats taken ahead of an older leaf's"
 
   private val regress = rtaccel.Regress.full
   // make regress adds M=8 on 128-bit beats and the quantized node (make test meets q8 in PlatformSpec and NodeDecodeSpec)
@@ -240,6 +246,15 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     val s = run(img, 256, 2000, 5L, errPercent = 3)
     info(report(s))
     assert(s.boxHits > 0 && s.triHits > 0 && s.badNodes > 0 && s.badPrims > 0)
+  }
+
+  // RESP_ORDER=path: two beat streams; each kind's results in its own order, nodes overtaking slower leaves
+  test("RESP_ORDER=path, TUs=4 M=4: node and leaf beats on their own ports; results equal the model, node beats taken ahead of older leaves' (1500 requests, seed 6)") {
+    val img = soupImage(6L, PlatformParams(tus = 4, m = 4, mppl = 4), fit = false)
+    val s = run(img, 256, 1500, 6L, errPercent = 3, respByPath = true)
+    info(report(s))
+    assert(s.boxHits > 0 && s.triHits > 0 && s.badNodes > 0 && s.badPrims > 0)
+    assert(s.overtakes > 0, "no node beat was taken ahead of an older leaf's: the two kinds are not independent")
   }
 
   test("no memory errors: every result is clean, TUs=4 M=4 (1000 requests, seed 4)") {
