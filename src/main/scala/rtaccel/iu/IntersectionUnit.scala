@@ -43,7 +43,8 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     val ray = new RayData
   }
   // one FIFO for every job (RESP_ORDER=request), or FIFO 0 for nodes and FIFO 1 for leaves (RESP_ORDER=path)
-  val jobQs = Seq.fill(if (p.respByPath) 2 else 1)(Module(new Queue(new Job, maxOutstanding)))
+  // (instance names: `jobs` as before RESP_ORDER existed, `jobs_node` / `jobs_leaf` with path)
+  val jobQs = (if (p.respByPath) Seq("jobs_node", "jobs_leaf") else Seq("jobs")).map(n => Module(new Queue(new Job, maxOutstanding)).suggestName(n))
   val r = arb.io.out.bits
   val reqIsLeaf = r.cref(primFlagBit)
   val jobReady = if (p.respByPath) Mux(reqIsLeaf, jobQs(1).io.enq.ready, jobQs(0).io.enq.ready) else jobQs(0).io.enq.ready
