@@ -38,11 +38,13 @@ class PlatformSpec extends AnyFunSuite {
   private def runOne(tus: Int, m: Int, mppl: Int, rays: Rays, scene: Scene, jitter: Int = 0, stall: Int = 0,
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
-                     packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1) = {
+                     packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1,
+                     byPath: Boolean = false) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
-      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels)
+      shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels,
+      respByPath = byPath)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec"))
@@ -243,14 +245,30 @@ class PlatformSpec extends AnyFunSuite {
   for ((ius, ch, tus, node, prim, jitter, stall) <- iusCases)
     test(s"IUS=$ius clusters, MEM_CHANNELS=$ch at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts per cluster equal the model") {
       val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch).json
-      assert(j("ius").num == ius && j("roofline")("ius").num == ius && j("mem_channels").num == ch && j("roofline")("mem_channels").num == ch, ujson.write(j))
-      if (node.entries > 0 || prim.entries > 0) {
-        val per = j("cluster_accesses").arr.map(_.num.toLong)
-        info(s"accesses per cluster: ${per.mkString(", ")}")
-        assert(per.length == ius && per.forall(_ > 0), s"every cluster must have worked: $per")
-        assert(per.sum == j("node_requests").num + j("counters")("leaf_requests").num, "the cluster logs must hold every access")
-      }
+      checkClusters(j, ius, ch, node, prim)
     }
+
+  // RESP_ORDER=path (docs/platform.md): node and leaf responses in two streams; bit-exact, and the caches' counts
+  // still equal the model replaying the RTL's own order. make test: IUS=2 with caches under jitter and backpressure.
+  private val pathCases = Seq((2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
+    (if (!full) Nil else Seq((1, 4, CacheParams(), CacheParams(), 17, 20), (1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
+      (2, 4, CacheParams(), CacheParams(), 0, 0)))
+  for ((ius, tus, node, prim, jitter, stall) <- pathCases)
+    test(s"RESP_ORDER=path, IUS=$ius at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts equal the model") {
+      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, byPath = true).json
+      assert(j("resp_order").str == "path", ujson.write(j))
+      checkClusters(j, ius, 1, node, prim)
+    }
+
+  private def checkClusters(j: ujson.Value, ius: Int, ch: Int, node: CacheParams, prim: CacheParams): Unit = {
+    assert(j("ius").num == ius && j("roofline")("ius").num == ius && j("mem_channels").num == ch && j("roofline")("mem_channels").num == ch, ujson.write(j))
+    if (node.entries > 0 || prim.entries > 0) {
+      val per = j("cluster_accesses").arr.map(_.num.toLong)
+      info(s"accesses per cluster: ${per.mkString(", ")}")
+      assert(per.length == ius && per.forall(_ > 0), s"every cluster must have worked: $per")
+      assert(per.sum == j("node_requests").num + j("counters")("leaf_requests").num, "the cluster logs must hold every access")
+    }
+  }
 
   // make regress: make test's cache, IUS and all-formats cases run under jitter and backpressure already
   if (full) test("random memory latency and host backpressure change no result") {
