@@ -64,6 +64,37 @@ class ThroughputSpec extends AnyFunSuite {
     assert(xs.zip(xs.tail).forall { case (a, c) => c >= a * (1 - 1e-12) } && xs.forall(_ <= 1 / d + 1e-15))
   }
 
+  test("RESP_ORDER=path: a stream's hits wait behind its own misses only; two ports; never slower than one stream") {
+    val (z, d) = (300.0, 137.0)
+    // nodes all hit, leaves all miss: merged, the hits wait behind the leaves' misses; split, nothing waits
+    val nodes = Throughput.InOrder(hits = 20, misses = 0, hitLatency = 12, missLatency = 40)
+    val leaves = Throughput.InOrder(hits = 0, misses = 3, hitLatency = 0, missLatency = 40)
+    val merged = Throughput.InOrder(hits = 20, misses = 3, hitLatency = 12, missLatency = 40)
+    for (n <- 2 to 32) {
+      val (xm, holM) = Throughput.mvaInOrder(z, d, 95.0, merged, n)
+      val (xs, holS) = Throughput.mvaInOrder(z, d, Seq(60.0, 35.0), Seq(nodes, leaves), n)
+      assert(holS == 0.0 && holM > 0, s"n=$n: split $holS, merged $holM")
+      assert(xs >= xm, s"n=$n: two streams $xs slower than one $xm")
+    }
+    // one stream over one port is the single-stream model exactly
+    assert(Throughput.mvaInOrder(z, d, Seq(95.0), Seq(merged), 16) == Throughput.mvaInOrder(z, d, 95.0, merged, 16))
+    // two ports of half the demand each saturate later than one: the bound is the busiest server
+    val (x2, _) = Throughput.mvaInOrder(0.0, 1.0, Seq(50.0, 50.0), Seq(leaves), 1024)
+    val (x1, _) = Throughput.mvaInOrder(0.0, 1.0, Seq(100.0), Seq(leaves), 1024)
+    assert(math.abs(x2 - 1 / 50.0) < 1e-9 && math.abs(x1 - 1 / 100.0) < 1e-9, s"$x2 $x1")
+    // predict: with a node cache that hits, path order is at least as fast, and more rays may be in flight
+    val sk = new CacheSink(Some(new CacheModel(CacheParams(8, 1, CachePolicy.Dm), LevelPolicy.paper)), None, 128, c => c * 64L)
+    for (r <- 0 until 64) { sk.node(r, 0, 0); sk.node(r, 1 + r % 3, 1); sk.leaf(r, r % 5, 3, 2) }
+    val p = Presets.paper2017
+    for (tus <- Seq(1, 8, 32, 64)) {
+      val req = Throughput.predict(p, sk.counts, rays = 64, tus = tus)
+      val path = Throughput.predict(p.copy(respByPath = true), sk.counts, rays = 64, tus = tus)
+      assert(path.raysPerCycle >= req.raysPerCycle * (1 - 1e-12), s"TUs=$tus: path ${path.raysPerCycle} < request ${req.raysPerCycle}")
+      assert(path.inFlightLimit == math.min(tus, 2 * p.hw.iuOutstanding) && req.inFlightLimit == math.min(tus, p.hw.iuOutstanding))
+      if (tus == 1) assert(path.raysPerCycle == req.raysPerCycle) // one ray: nothing to overtake
+    }
+  }
+
   /** An event simulation of the network the model abstracts: n TUs with one access outstanding each; accesses
     * drawn from `mix` (weight, hit, beats, path cycles, DRAM bytes); a hit is ready `path` cycles after issue, a
     * miss starts its transfer at max(issue + path, DRAM free) and its beats leave as it streams in (ready after
