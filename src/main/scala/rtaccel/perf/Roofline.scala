@@ -12,13 +12,16 @@ import rtaccel.mc.{AxiParams, McGeometry}
   * beats that the MC delivers one per cycle (cache hits too), and its box and triangle pipelines accept one
   * whole node / primitive per cycle, so the beat port is its limit: a node costs nodeBeats cycles, a primitive
   * primBeats cycles. Boxes and triangles share the port, so the combined bound is the harmonic sum of the two.
+  * RESP_ORDER=path: the MC has a node stream and a primitive stream, each one beat per cycle into its own
+  * collection, so each kind has its own port and the combined bound is the smaller of the two.
   */
 object Roofline {
-  /** The replicated resources each bound scales with: IUS= and MEM_CHANNELS= (this is the one place that reads them). */
-  final case class Resources(ius: Int, memChannels: Int) {
+  /** The replicated resources each bound scales with: IUS= and MEM_CHANNELS= (this is the one place that reads them),
+    * and whether each IU has one beat port for both kinds or one per kind (RESP_ORDER=path). */
+  final case class Resources(ius: Int, memChannels: Int, portPerKind: Boolean = false) {
     require(ius >= 1 && memChannels >= 1, s"IU count and memory channels must be >= 1 (got $ius, $memChannels)")
   }
-  def resources(p: PlatformParams): Resources = Resources(ius = p.ius, memChannels = p.memChannels)
+  def resources(p: PlatformParams): Resources = Resources(ius = p.ius, memChannels = p.memChannels, portPerKind = p.respByPath)
 
   /** What one IU does per cycle, from the RTL's geometry (IntersectionUnit: one beat per cycle). */
   final case class IuRates(nodeBeats: Int, primBeats: Double) {
@@ -92,15 +95,18 @@ object Roofline {
     // one channel's share of the platform's total, times the channels of `res` (a what-if may name other counts)
     val sustained = p.memBytesPerSecondTotal / p.memChannels * res.memChannels
     val iuBeatsPerS = clock * res.ius
+    val boxBound = bound(iuBeatsPerS, nodes * rates.nodeBeats); val triBound = bound(iuBeatsPerS, prims * rates.primBeats)
+    val nodeBeats = r.nodeRequests.toDouble * rates.nodeBeats; val primBeats = r.primRequests.toDouble * rates.primBeats
     Result(
       raysPerS = n / cyc * clock,
       memoryBound = bound(sustained, dramBytes),
-      computeBound = bound(iuBeatsPerS, nodes * rates.nodeBeats + prims * rates.primBeats),
-      boxBound = bound(iuBeatsPerS, nodes * rates.nodeBeats), triBound = bound(iuBeatsPerS, prims * rates.primBeats),
+      computeBound = if (res.portPerKind) (boxBound.toSeq ++ triBound).minOption else bound(iuBeatsPerS, nodes * rates.nodeBeats + prims * rates.primBeats),
+      boxBound = boxBound, triBound = triBound,
       dramBytesPerRay = dramBytes, nodesPerRay = nodes, primsPerRay = prims,
       // each utilisation is achieved / that resource's bound: the busiest resource is the nearest roof
       memUtil = r.memBusyBeats.toDouble * axi.beatBytes / (cyc * sustained / clock),
-      iuUtil = (r.nodeRequests.toDouble * rates.nodeBeats + r.primRequests.toDouble * rates.primBeats) / (cyc * res.ius),
+      // (a port per kind: the busier port's)
+      iuUtil = (if (res.portPerKind) math.max(nodeBeats, primBeats) else nodeBeats + primBeats) / (cyc * res.ius),
       tuUtil = r.tuBusyCycles / (cyc * p.tus),
       // shares: of TU-cycles waiting for the IU's arbiter; of cycles the IU waits for a beat; of cycles DRAM refuses a read
       stallIuArbitration = r.stallIuArbitration / (cyc * p.tus), stallMemoryData = r.stallMemoryData / cyc,

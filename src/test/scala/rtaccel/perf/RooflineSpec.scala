@@ -60,6 +60,10 @@ class RooflineSpec extends AnyFunSuite {
     assert(four.computeBound.get == 4 * one.computeBound.get && four.boxBound.get == 4 * one.boxBound.get)
     assert(four.memoryBound.get == 2 * one.memoryBound.get && four.memUtil == one.memUtil / 2 && four.iuUtil == one.iuUtil / 4)
     assert(intercept[IllegalArgumentException](Roofline.Resources(0, 1)).getMessage.contains("IU count"))
+    // RESP_ORDER=path: a beat port per kind, so the nearer of the two kinds' bounds (here the boxes') binds
+    assert(Roofline.resources(p.copy(respByPath = true)) == Roofline.Resources(1, 1, portPerKind = true))
+    val path = Roofline.of(p.copy(respByPath = true), r)
+    assert(path.computeBound.get == math.min(one.boxBound.get, one.triBound.get) && path.computeBound.get > one.computeBound.get)
   }
 
   test("randomized against the bounds written as times: bytes at the sustained rate, beats at one per cycle") {
@@ -68,7 +72,7 @@ class RooflineSpec extends AnyFunSuite {
       val q = p.copy(m = Seq(2, 4, 8)(rnd.nextInt(3)), axiDataBits = Seq(128, 256, 512)(rnd.nextInt(3)), tus = 1 + rnd.nextInt(64),
         clockMhz = 50 + rnd.nextInt(300), memory = p.memory.copy(bytesPerSecond = 1e8 + rnd.nextDouble() * 2e10,
           sustainedEfficiency = 0.1 + 0.9 * rnd.nextDouble()))
-      val res = Roofline.Resources(1 + rnd.nextInt(4), 1 + rnd.nextInt(4))
+      val res = Roofline.Resources(1 + rnd.nextInt(4), 1 + rnd.nextInt(4), portPerKind = rnd.nextBoolean())
       val rays = 1L + rnd.nextInt(100000)
       val (nodes, prims, beats) = (rnd.nextInt(5000000).toLong, rnd.nextInt(2000000).toLong, 1L + rnd.nextInt(1000000))
       val cycles = 1L + rnd.nextInt(50000000)
@@ -78,7 +82,9 @@ class RooflineSpec extends AnyFunSuite {
       val dramSecondsPerRay = beats * bytesPerBeat / (q.memory.bytesPerSecond * q.memory.sustainedEfficiency * res.memChannels) / rays
       val nodeBeats = Map(2 -> 64, 4 -> 128, 8 -> 256)(q.m) / bytesPerBeat // 28 B per child, stored in a power of two
       val primBeats = 64 / bytesPerBeat
-      val iuSecondsPerRay = (nodes * nodeBeats + prims * primBeats).toDouble / (q.clockMhz * 1e6 * res.ius) / rays
+      // one port for both kinds: their beats add up; a port per kind (RESP_ORDER=path): the busier port's beats
+      val portBeats = if (res.portPerKind) math.max(nodes * nodeBeats, prims * primBeats) else nodes * nodeBeats + prims * primBeats
+      val iuSecondsPerRay = portBeats.toDouble / (q.clockMhz * 1e6 * res.ius) / rays
       def close(a: Double, b: Double) = math.abs(a - b) <= 1e-9 * math.abs(b)
       assert(close(r.memoryBound.get, 1 / dramSecondsPerRay))
       if (nodes + prims > 0) assert(close(r.computeBound.get, 1 / iuSecondsPerRay)) else assert(r.computeBound.isEmpty)
