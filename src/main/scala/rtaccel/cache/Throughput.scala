@@ -128,15 +128,14 @@ object Throughput {
     val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primBytesAll) / beatBytes / n
     val delay = math.max(0.0, latency - dram - beats)
     // a lone hit: the path's overhead (every access of a cached path pays it) and its beats from the cache
-    def stream(accesses: Double, misses: Double, over: Double, hb: Double): InOrder = {
-      val hits = accesses - misses
+    def stream(accesses: Double, hits: Double, misses: Double, over: Double, hb: Double): InOrder =
       InOrder(hits / n, misses / n, if (hits > 0) over / accesses + hb / beatBytes / hits else 0.0, lat)
-    }
+    val (nodeAcc, leafAcc) = (s.nodeAccesses.toDouble, s.leafAccesses.toDouble)
     // RESP_ORDER=request: one stream over both paths and one response port; path: a stream and a port per path
     val (ports, streams) =
       if (p.respByPath) (Seq(nodeBeats, primBeats),
-        Seq(stream(s.nodeAccesses.toDouble, nodeMisses, nodeOverhead, nodeHitBytes), stream(s.leafAccesses.toDouble, leafMisses, primOverhead, primHitBytes)))
-      else (Seq(beats), Seq(stream(s.nodeAccesses.toDouble + s.leafAccesses, nodeMisses + leafMisses, overhead, hitBytes)))
+        Seq(stream(nodeAcc, nodeAcc - nodeMisses, nodeMisses, nodeOverhead, nodeHitBytes), stream(leafAcc, leafAcc - leafMisses, leafMisses, primOverhead, primHitBytes)))
+      else { val acc = nodeAcc + leafAcc; (Seq(beats), Seq(stream(acc, acc - nodeMisses - leafMisses, nodeMisses + leafMisses, overhead, hitBytes))) }
     // IUS clusters: each is the network above with TUS / IUS TUs, its own response port and a 1/IUS share of the
     // DRAM (the clusters are alike on average); the platform does IUS times one cluster's rays
     val k = p.ius
