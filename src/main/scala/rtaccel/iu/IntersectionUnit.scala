@@ -44,7 +44,12 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   }
   // one FIFO for every job (RESP_ORDER=request), or FIFO 0 for nodes and FIFO 1 for leaves (RESP_ORDER=path)
   // (instance names: `jobs` as before RESP_ORDER existed, `jobs_node` / `jobs_leaf` with path)
-  val jobQs = (if (p.respByPath) Seq("jobs_node", "jobs_leaf") else Seq("jobs")).map(n => Module(new Queue(new Job, maxOutstanding)).suggestName(n))
+  // (path: each kind's FIFO its own module, so that the fields its kind never reads are not stored)
+  val jobQs = (if (p.respByPath) Seq("jobs_node", "jobs_leaf") else Seq("jobs")).map { n =>
+    val q = Module(new Queue(new Job, maxOutstanding)).suggestName(n)
+    if (p.respByPath) chisel3.experimental.doNotDedup(q)
+    q
+  }
   val r = arb.io.out.bits
   val reqIsLeaf = r.cref(primFlagBit)
   val jobReady = if (p.respByPath) Mux(reqIsLeaf, jobQs(1).io.enq.ready, jobQs(0).io.enq.ready) else jobQs(0).io.enq.ready
@@ -94,6 +99,9 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
       when(unitDone && isLeaf) { primIdx := Mux(jobDone, 0.U, primIdx + 1.U) }
     }
     jobs.ready := jobDone
+    // RESP_ORDER=path: nothing else reads a stream's `last` (the request-order MC's mux does), so check here that
+    // it agrees with the size of the job this collection counted
+    if (only.isDefined) when(beatFire) { assert(beats.bits.last === jobDone, "IntersectionUnit: a response's last beat disagrees with its job's size") }
 
     val node = Wire(new NodeJob(p))
     node.tu := job.tu
@@ -120,6 +128,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
       asm.io.in.bits.ctx.tmax := job.tmax
       beats.ready := jobs.valid && (!isLeaf || asm.io.in.ready)
       jobs.ready := Mux(isLeaf, asm.io.leafTaken, jobDone)
+      if (only.isDefined) when(beats.fire && isLeaf) { assert(beats.bits.last === asm.io.leafTaken, "IntersectionUnit: a leaf's last beat disagrees with its size") }
       tri.valid := asm.io.out.valid
       tri.bits := asm.io.out.bits
     }
