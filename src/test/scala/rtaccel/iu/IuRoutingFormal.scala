@@ -47,14 +47,10 @@ object IuRoutingFormal {
   *    memory's words of that node / primitive; a node or primitive read with the magic beat poisoned has err set;
   *  - with bounded memory stalls (bounds.live): a TU's request is answered within `answerBound` cycles of being
   *    presented.
-  * byPath (RESP_ORDER=path): node reads and leaf reads go to two abstract memories with their own stalls, each
-  * answering on its own stream (io.mem.resp, io.mem.primResp), so leaves and nodes complete out of order against
-  * each other; the monitor is the same (its order checks were per kind already), the data checks ask the
-  * memory that served the read.
   */
-class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.None, byPath: Boolean = false) extends Module {
+class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.None) extends Module {
   import IuRoutingFormal._
-  val p = platform.copy(respByPath = byPath)
+  val p = platform
   private val f = p.refs
   private val tus = p.tus
   val io = IO(new Bundle {
@@ -63,7 +59,6 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     val ray = Input(new RayData)
     val tmax = Input(UInt(32.W))
     val mem = Input(new MemFree(beatBits))
-    val leafMem = Input(new MemFree(beatBits)) // byPath: the leaf stream's memory
     val bugFire = Input(Bool())
   })
   val dut = Module(new IntersectionUnit(p, beatBits, p.tus))
@@ -86,16 +81,7 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
   memReq.bits.addr := Mux(isLeaf(ref), slotAddr(ref, 0.U), nodeAddr(ref))
   memReq.bits.beats := Mux(isLeaf(ref), count(ref) * primBeats.U, nodeBeats.U)
   dut.io.mem.req.ready := memReq.ready
-  // the memory whose data a leaf's results must carry: the same one, or the leaf stream's own (byPath)
-  val leafMem = if (!byPath) mem else { val m = new AbstractMem(addrBits, beatsBits, beatBits, depth = 2, bounds); m.free := io.leafMem; m }
-  if (!byPath) mem.serve(memReq, dut.io.mem.resp)
-  else {
-    val reqs = Seq.fill(2)(Wire(Decoupled(new MemReq(addrBits, beatsBits)))) // node reads, leaf reads
-    for ((r, leaf) <- reqs.zip(Seq(false, true))) { r.valid := memReq.valid && isLeaf(ref) === leaf.B; r.bits := memReq.bits }
-    memReq.ready := Mux(isLeaf(ref), reqs(1).ready, reqs(0).ready)
-    mem.serve(reqs(0), dut.io.mem.resp)
-    leafMem.serve(reqs(1), dut.io.mem.primResp.get)
-  }
+  mem.serve(memReq, dut.io.mem.resp)
 
   // ---- the results as the monitor sees them (through the injected fault, if any)
   val box = WireDefault(dut.io.box)
@@ -163,10 +149,10 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
       val w = 9 // the triangle id word of a primitive slot
       val b = w * 32 / beatBits; val pos = w % (beatBits / 32)
       val slot = slotAddr(cref, got)
-      when(leafMem.beatAddr(slot, b.U) === leafMem.magicBeat) {
-        assert(tri.bits.prim === leafMem.magicData(32 * pos + 31, 32 * pos), "a triangle id differs from the memory")
+      when(mem.beatAddr(slot, b.U) === mem.magicBeat) {
+        assert(tri.bits.prim === mem.magicData(32 * pos + 31, 32 * pos), "a triangle id differs from the memory")
       }
-      when(leafMem.magicErr && (0 until primBeats).map(b => leafMem.beatAddr(slot, b.U) === leafMem.magicBeat).reduce(_ || _)) {
+      when(mem.magicErr && (0 until primBeats).map(b => mem.beatAddr(slot, b.U) === mem.magicBeat).reduce(_ || _)) {
         assert(tri.bits.err, "a primitive read with an error not flagged")
       }
       got := got + 1.U

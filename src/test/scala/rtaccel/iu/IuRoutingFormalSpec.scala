@@ -17,11 +17,6 @@ class IuRoutingFormalSpec extends AnyFlatSpec with FormalChecks {
     prove(new IuRoutingFormal(live, answerBound), depth)
   if (regress) for (bug <- Seq(IuBug.Spurious, IuBug.Retag, IuBug.Corrupt, IuBug.Duplicate))
     it should s"find a counterexample to a ${bug.name}" in refute(new IuRoutingFormal(live, answerBound, bug), depth)
-  // RESP_ORDER=path: nodes and leaves on two streams from two memories, completing out of order against each other
-  if (regress) it should s"with RESP_ORDER=path, answer each TU request once, tagged and in per-kind order, with the memory's data, within $answerBound cycles" in
-    prove(new IuRoutingFormal(live, answerBound, byPath = true), depth)
-  if (regress) for (bug <- Seq(IuBug.Retag, IuBug.Corrupt, IuBug.Starve))
-    it should s"with RESP_ORDER=path, find a counterexample to a ${bug.name}" in refute(new IuRoutingFormal(live, answerBound, bug, byPath = true), depth)
 }
 
 object IuRoutingFormalSpec {
