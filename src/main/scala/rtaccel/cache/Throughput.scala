@@ -128,6 +128,7 @@ object Throughput {
     val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primBytesAll) / beatBytes / n
     val delay = math.max(0.0, latency - dram - beats)
     // a lone hit: the path's overhead (every access of a cached path pays it) and its beats from the cache
+    // (hits given, not derived from accesses - misses: the request-order stream keeps its old arithmetic bit for bit)
     def stream(accesses: Double, hits: Double, misses: Double, over: Double, hb: Double): InOrder =
       InOrder(hits / n, misses / n, if (hits > 0) over / accesses + hb / beatBytes / hits else 0.0, lat)
     val (nodeAcc, leafAcc) = (s.nodeAccesses.toDouble, s.leafAccesses.toDouble)

@@ -184,6 +184,8 @@ final case class PlatformParams(
   val tuBits: Int = math.max(1, 32 - Integer.numberOfLeadingZeros(tus - 1))
   /** TUs per IU cluster: TU i belongs to cluster i / tusPerIu (its IU, MC and caches). */
   val tusPerIu: Int = tus / ius
+  /** RESP_ORDER's name, as outputs record it */
+  def respOrder: String = RespOrder.name(respByPath)
   val cyclesPerSecond: Double = clockMhz * 1e6
   /** Sustained DRAM bytes per cycle of ONE channel: MEM_GBPS is per channel, since each of the MEM_CHANNELS is an
     * AXI4 master with a DRAM of its own, and the simulator models each channel alone (sim.DramModel at this rate).

@@ -95,18 +95,18 @@ object Roofline {
     // one channel's share of the platform's total, times the channels of `res` (a what-if may name other counts)
     val sustained = p.memBytesPerSecondTotal / p.memChannels * res.memChannels
     val iuBeatsPerS = clock * res.ius
-    val boxBound = bound(iuBeatsPerS, nodes * rates.nodeBeats); val triBound = bound(iuBeatsPerS, prims * rates.primBeats)
+    // beats per ray on the busiest IU port: both kinds share one, or each kind has its own (RESP_ORDER=path)
+    def port(a: Double, b: Double) = if (res.portPerKind) math.max(a, b) else a + b
     val nodeBeats = r.nodeRequests.toDouble * rates.nodeBeats; val primBeats = r.primRequests.toDouble * rates.primBeats
     Result(
       raysPerS = n / cyc * clock,
       memoryBound = bound(sustained, dramBytes),
-      computeBound = if (res.portPerKind) (boxBound.toSeq ++ triBound).minOption else bound(iuBeatsPerS, nodes * rates.nodeBeats + prims * rates.primBeats),
-      boxBound = boxBound, triBound = triBound,
+      computeBound = bound(iuBeatsPerS, port(nodes * rates.nodeBeats, prims * rates.primBeats)),
+      boxBound = bound(iuBeatsPerS, nodes * rates.nodeBeats), triBound = bound(iuBeatsPerS, prims * rates.primBeats),
       dramBytesPerRay = dramBytes, nodesPerRay = nodes, primsPerRay = prims,
       // each utilisation is achieved / that resource's bound: the busiest resource is the nearest roof
       memUtil = r.memBusyBeats.toDouble * axi.beatBytes / (cyc * sustained / clock),
-      // (a port per kind: the busier port's)
-      iuUtil = (if (res.portPerKind) math.max(nodeBeats, primBeats) else nodeBeats + primBeats) / (cyc * res.ius),
+      iuUtil = port(nodeBeats, primBeats) / (cyc * res.ius),
       tuUtil = r.tuBusyCycles / (cyc * p.tus),
       // shares: of TU-cycles waiting for the IU's arbiter; of cycles the IU waits for a beat; of cycles DRAM refuses a read
       stallIuArbitration = r.stallIuArbitration / (cyc * p.tus), stallMemoryData = r.stallMemoryData / cyc,
