@@ -72,8 +72,8 @@ KNOBS = {
     "IUS": Knob("--ius", "an integer 1..64 (intersection units; TUS must be a multiple)", _int(1, 64)),
     "MEM_CHANNELS": Knob("--mem-channels", "1, 2, 4, 8 or 16 (address-interleaved DRAM channels, MEM_GBPS each)",
                          lambda v: _int(1, 16)(v) and _pow2(v)),
-    "RESP_ORDER": Knob("--resp-order", "request (one in-order stream, the paper's) or path (node and primitive streams)",
-                       _one_of(("request", "path"))),
+    "RESP_ORDER": Knob("--resp-order", "request (one in-order stream, the paper's), path (node and primitive streams) "
+                       "or tagged (the two streams, hits under misses)", _one_of(("request", "path", "tagged"))),
     "M": Knob("--m", "2, 4 or 8", _one_of((2, 4, 8))),
     "MPPL": Knob("--mppl", "an integer 1..16", _int(1, 16)),
     "STACK": Knob("--stack-depth", "an integer 1..4096", _int(1, 4096)),

@@ -27,6 +27,8 @@ import rtaccel.config.PlatformParams
   * RESP_ORDER=path: the MC answers nodes and leaves in two streams, each over its own response port (and IU
   * collection); a stream's hits wait behind that stream's youngest miss only, and up to hw.iuOutstanding
   * accesses of each kind are in flight (the IU's two job FIFOs), so the limit is min(TUs, 2 hw.iuOutstanding).
+  * RESP_ORDER=tagged: the two streams answer in any order (a hit leaves beside older misses), so no hit waits for
+  * head-of-line blocking and every TU may have an access in flight (the IU keeps a job per TU): the limit is TUs.
   * At most min(TUs, hw.iuOutstanding, hw.mcOutstanding) rays have an access in the MC: the rest wait at the
   * IU's arbiter, and since the model's ray time is all memory time, N beyond that limit adds nothing.
   * Measured against the RTL and against an event simulation of the same in-order network in docs/dse.md
@@ -129,8 +131,10 @@ object Throughput {
     val delay = math.max(0.0, latency - dram - beats)
     // a lone hit: the path's overhead (every access of a cached path pays it) and its beats from the cache
     // (hits given, not derived from accesses - misses: the request-order stream keeps its old arithmetic bit for bit)
+    // (RESP_ORDER=tagged: a stream without head-of-line blocking, i.e. no hit waits behind its misses)
     def stream(accesses: Double, hits: Double, misses: Double, over: Double, hb: Double): InOrder =
-      InOrder(hits / n, misses / n, if (hits > 0) over / accesses + hb / beatBytes / hits else 0.0, lat)
+      if (p.respTagged) InOrder(0.0, misses / n, 0.0, lat)
+      else InOrder(hits / n, misses / n, if (hits > 0) over / accesses + hb / beatBytes / hits else 0.0, lat)
     val (nodeAcc, leafAcc) = (s.nodeAccesses.toDouble, s.leafAccesses.toDouble)
     // RESP_ORDER=request: one stream over both paths and one response port; path: a stream and a port per path
     val (ports, streams) =
@@ -141,8 +145,9 @@ object Throughput {
     // DRAM (the clusters are alike on average); the platform does IUS times one cluster's rays
     val k = p.ius
     require(tus % k == 0, s"TUS=$tus does not split evenly over IUS=$k intersection units")
-    // rays with an access in flight: the IU's job FIFO and the MC's order FIFO (request), or a job FIFO per kind (path)
-    val limit = if (p.respByPath) math.min(tus / k, 2 * p.hw.iuOutstanding) else Seq(tus / k, p.hw.iuOutstanding, p.hw.mcOutstanding).min
+    // rays with an access in flight: the IU's job FIFO and the MC's order FIFO (request), a job FIFO per kind (path),
+    // or a job per TU (tagged)
+    val limit = if (p.respTagged) tus / k else if (p.respByPath) math.min(tus / k, 2 * p.hw.iuOutstanding) else Seq(tus / k, p.hw.iuOutstanding, p.hw.mcOutstanding).min
     val (x, hol) = mvaInOrder(delay, dram * k, ports, streams, limit)
     Prediction(latency, dram, beats, x * k, mva(delay, Seq(dram * k, beats), tus / k) * k, hol, limit)
   }

@@ -44,8 +44,10 @@ object Cli {
     val mhz = a.opt("clock-mhz").map(_ => a.double("clock-mhz", 0)).orElse(board.map(_.clockMhz))
     val base = preset.copy(memory = gbps.fold(preset.memory)(g => preset.memory.copy(bytesPerSecond = g * 1e9)),
       clockMhz = mhz.getOrElse(preset.clockMhz))
+    val respOrder = a.opt("resp-order").map(RespOrder.parse)
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus), ius = a.int("ius", base.ius), memChannels = a.int("mem-channels", base.memChannels),
-      respByPath = a.opt("resp-order").map(RespOrder.parse).getOrElse(base.respByPath),
+      respByPath = respOrder.fold(base.respByPath)(_ != RespOrder.Request),
+      respTagged = respOrder.fold(base.respTagged)(_ == RespOrder.Tagged),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),

@@ -155,7 +155,7 @@ object Simulate {
       (if (p.boxFormat != rtaccel.fp.FpFormat.fp32) s"-box${p.boxFormat.name}" else "") +
       (if (p.triTest != rtaccel.config.TriTest.Mt) s"-tri${p.triTest.name}" else "") +
       (if (p.triFormat != rtaccel.fp.FpFormat.fp32) s"-tri${p.triFormat.name}" else "") +
-      (if (p.respByPath) "-rpath" else "") +
+      (if (p.respByPath) s"-r${p.respOrder}" else "") +
       (if (p.primPacked) s"-packed${p.mppl}" else "") + // the leaf row (MPPL records) is a constant of the MC
       (if (p.nodeQuantBits > 0) s"-node${Numerics.nodeFormatName(p.nodeQuantBits)}" else "") +
       s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +

@@ -32,16 +32,18 @@ final case class CacheParams(entries: Int = 0, ways: Int = 1, policy: CachePolic
   require(maxLevel >= 0, s"MAX_LEVEL must be >= 0 (got $maxLevel)")
 }
 
-/** RESP_ORDER: the order in which the MC answers (PlatformParams.respByPath). */
+/** RESP_ORDER: the order in which the MC answers (PlatformParams.respByPath, respTagged). */
 object RespOrder {
   val Request = "request"
   val Path = "path"
-  def parse(name: String): Boolean = name.toLowerCase match {
-    case Request => false
-    case Path => true
-    case _ => throw new InputError(s"RESP_ORDER=$name is not a response order; use $Request (one stream in request order, the paper's) or $Path (node and primitive streams, each in its own order)")
+  val Tagged = "tagged"
+  /** The order's name, checked: request, path or tagged. */
+  def parse(name: String): String = name.toLowerCase match {
+    case n @ (Request | Path | Tagged) => n
+    case _ => throw new InputError(s"RESP_ORDER=$name is not a response order; use $Request (one stream in request order, the paper's), " +
+      s"$Path (node and primitive streams, each in its own order) or $Tagged (the two streams, each answered in any order, tagged by the requesting TU)")
   }
-  def name(byPath: Boolean): String = if (byPath) Path else Request
+  def name(byPath: Boolean, tagged: Boolean = false): String = if (tagged) Tagged else if (byPath) Path else Request
 }
 
 /** Fixed sizes of the hardware that no scene changes: bus widths, outstanding-request limits, queue depths,
@@ -56,6 +58,7 @@ final case class HwLimits(
   cacheTickets: Int = 32,     // lookups a cache path holds between tag and data stage
   cacheMissQueue: Int = 4,    // DRAM reads a cache path queues
   cacheOutQueue: Int = 4,     // beats a cache path buffers towards the IU (>= 3: the data RAM read pipeline)
+  cacheHitQueue: Int = 4,     // RESP_ORDER=tagged: hits a cache path holds for its data RAM beside the misses' tickets
   dramQueueDepth: Int = 16,   // AR requests the simulated DRAM queues
   levelCodeBits: Int = 4,     // paper Section 7.2: node levels 0..14, 15 = 15 and deeper
   cachePathCycles: Double = 8.0, // Throughput: extra cycles per access through a cache path (docs/caches.md)
@@ -72,6 +75,7 @@ final case class HwLimits(
   require(cacheTickets >= 2 && cacheTickets <= 1024, s"cache tickets must be 2..1024 (got $cacheTickets)")
   require(cacheMissQueue >= 1 && cacheMissQueue <= 64, s"cache miss queue must be 1..64 (got $cacheMissQueue)")
   require(cacheOutQueue >= 3 && cacheOutQueue <= 64, s"cache output queue must be 3..64 beats (got $cacheOutQueue): the data RAM pipeline keeps up to 3 beats in flight")
+  require(cacheHitQueue >= 1 && cacheHitQueue <= 64, s"cache hit queue must be 1..64 (got $cacheHitQueue)")
   require(dramQueueDepth >= 1 && dramQueueDepth <= 256, s"DRAM queue depth must be 1..256 (got $dramQueueDepth)")
   require(levelCodeBits >= 1 && levelCodeBits <= 6, s"level code must be 1..6 bits (got $levelCodeBits); the RTL tabulates 2^bits x 2^bits classes")
   require(cachePathCycles >= 0, s"cache path cycles cannot be negative (got $cachePathCycles)")
@@ -112,8 +116,13 @@ final case class PlatformParams(
   // RESP_ORDER=path: the MC answers node and primitive requests in two streams, each in its own path's order, so a
   // node hit never waits behind an older primitive miss (nor a primitive hit behind a node miss); request = one
   // stream in global request order, the paper's design (docs/platform.md, "Response order")
-  respByPath: Boolean = false
+  respByPath: Boolean = false,
+  // RESP_ORDER=tagged (with respByPath): each stream answers in any order, every beat tagged with the requesting TU
+  // (each TU has one request in flight), so a cache hit never waits behind an older miss of its own path either
+  // (hits under misses; docs/platform.md, "Response order")
+  respTagged: Boolean = false
 ) {
+  require(!respTagged || respByPath, "RESP_ORDER=tagged answers on the two path streams; set respByPath with respTagged")
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
     s"TRI_FORMAT=${triFormat.name} is narrower than fp32; use fp32, fp64 or e<E>m<M> with E >= 8 and M >= 23")
   require(triFormat == rtaccel.fp.FpFormat.fp32 || triTest == TriTest.Mt,
@@ -185,7 +194,9 @@ final case class PlatformParams(
   /** TUs per IU cluster: TU i belongs to cluster i / tusPerIu (its IU, MC and caches). */
   val tusPerIu: Int = tus / ius
   /** RESP_ORDER's name, as outputs record it */
-  def respOrder: String = RespOrder.name(respByPath)
+  def respOrder: String = RespOrder.name(respByPath, respTagged)
+  /** RESP_ORDER=tagged: bits of a response tag, the requesting TU's index within its IU cluster (0: untagged) */
+  val respTagBits: Int = if (respTagged) math.max(1, 32 - Integer.numberOfLeadingZeros(tusPerIu - 1)) else 0
   val cyclesPerSecond: Double = clockMhz * 1e6
   /** Sustained DRAM bytes per cycle of ONE channel: MEM_GBPS is per channel, since each of the MEM_CHANNELS is an
     * AXI4 master with a DRAM of its own, and the simulator models each channel alone (sim.DramModel at this rate).

@@ -13,6 +13,9 @@ import rtaccel.mc.{FetchBeat, FetchReq}
   * RESP_ORDER=request: one job FIFO and one collection follow the MC's single in-order stream.
   * RESP_ORDER=path: a job FIFO and a collection per kind (nodes, leaves), each fed by its own MC stream, so a
   * node's box test never waits for an older leaf's data; up to `maxOutstanding` jobs of each kind.
+  * RESP_ORDER=tagged: the two streams answer in any order, each beat tagged with its requester (the arbiter's
+  * input: a TU has one request in flight); a job table of one entry per requester (LUTRAM) replaces the FIFOs and
+  * each collection reads its job by the beat's tag.
   */
 class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extends Module {
   private val maxOutstanding = p.hw.iuOutstanding
@@ -21,9 +24,9 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     val box = Valid(new BoxResult(p))
     val tri = Valid(new TriResult(p))
     val mem = new Bundle {
-      val req = Decoupled(new FetchReq)
-      val resp = Flipped(Decoupled(new FetchBeat(beatBits))) // RESP_ORDER=path: node beats only
-      val primResp = if (p.respByPath) Some(Flipped(Decoupled(new FetchBeat(beatBits)))) else None // RESP_ORDER=path
+      val req = Decoupled(new FetchReq(p.respTagBits))
+      val resp = Flipped(Decoupled(new FetchBeat(beatBits, p.respTagBits))) // RESP_ORDER=path: node beats only
+      val primResp = if (p.respByPath) Some(Flipped(Decoupled(new FetchBeat(beatBits, p.respTagBits)))) else None // RESP_ORDER=path
     }
   })
   private val beatWords = beatBits / 32
@@ -45,26 +48,42 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   // one FIFO for every job (RESP_ORDER=request), or FIFO 0 for nodes and FIFO 1 for leaves (RESP_ORDER=path)
   // (instance names: `jobs` as before RESP_ORDER existed, `jobs_node` / `jobs_leaf` with path)
   // (path: each kind's FIFO its own module, so that the fields its kind never reads are not stored)
-  val jobQs = (if (p.respByPath) Seq("jobs_node", "jobs_leaf") else Seq("jobs")).map { n =>
+  val jobQs = (if (p.respTagged) Nil else if (p.respByPath) Seq("jobs_node", "jobs_leaf") else Seq("jobs")).map { n =>
     val q = Module(new Queue(new Job, maxOutstanding)).suggestName(n)
     if (p.respByPath) chisel3.experimental.doNotDedup(q)
     q
   }
   val r = arb.io.out.bits
   val reqIsLeaf = r.cref(primFlagBit)
-  val jobReady = if (p.respByPath) Mux(reqIsLeaf, jobQs(1).io.enq.ready, jobQs(0).io.enq.ready) else jobQs(0).io.enq.ready
+  val jobReady = if (p.respTagged) true.B else if (p.respByPath) Mux(reqIsLeaf, jobQs(1).io.enq.ready, jobQs(0).io.enq.ready) else jobQs(0).io.enq.ready
   io.mem.req.valid := arb.io.out.valid && jobReady
   io.mem.req.bits.childRef := r.cref
+  for (t <- io.mem.req.bits.tag) t := arb.io.chosen
+  val newJob = Wire(new Job)
+  newJob.tu := r.tu
+  newJob.isLeaf := reqIsLeaf
+  newJob.lastPrim := (if (p.refs.countBits == 0) 0.U else r.cref(p.refs.primIndexBits + p.refs.countBits - 1, p.refs.primIndexBits))
+  newJob.tmax := r.tmax
+  newJob.ray := r.ray
   for ((q, i) <- jobQs.zipWithIndex) {
     val mine = if (p.respByPath) reqIsLeaf === (i == 1).B else true.B
     q.io.enq.valid := arb.io.out.valid && io.mem.req.ready && mine
-    q.io.enq.bits.tu := r.tu
-    q.io.enq.bits.isLeaf := reqIsLeaf
-    q.io.enq.bits.lastPrim := (if (p.refs.countBits == 0) 0.U else r.cref(p.refs.primIndexBits + p.refs.countBits - 1, p.refs.primIndexBits))
-    q.io.enq.bits.tmax := r.tmax
-    q.io.enq.bits.ray := r.ray
+    q.io.enq.bits := newJob
   }
   arb.io.out.ready := io.mem.req.ready && jobReady
+  // RESP_ORDER=tagged: a requester's job waits in its table entry until its answer; each collection sees a job
+  // stream whose head is the job its beat's tag names, valid while a job of its kind is outstanding
+  // (at least 2 entries: a 1-bit tag addresses it)
+  val jobTable = if (p.respTagged) Some(Mem(math.max(2, requesters), new Job)) else None
+  for (t <- jobTable) when(io.mem.req.fire) { t.write(arb.io.chosen, newJob) }
+  def tableJobs(beats: DecoupledIO[FetchBeat], leaf: Boolean): DecoupledIO[Job] = {
+    val jobs = Wire(Decoupled(new Job))
+    val outstanding = RegInit(0.U(log2Ceil(requesters + 1).W))
+    outstanding := outstanding + (io.mem.req.fire && reqIsLeaf === leaf.B).asUInt - jobs.fire.asUInt
+    jobs.valid := outstanding =/= 0.U
+    jobs.bits := jobTable.get(beats.bits.tag.get)
+    jobs
+  }
 
   /** Collection: the beats of `beats`, in the order of the jobs of `jobs`, become whole nodes (to the box
     * pipe) or whole primitives (to the triangle pipe). `only` = Some(leaf) when every job is of one kind
@@ -137,6 +156,8 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
 
   val (boxIn, triJob) =
     if (!p.respByPath) collect(jobQs(0).io.deq, io.mem.resp, None)
+    else if (p.respTagged) (collect(tableJobs(io.mem.resp, leaf = false), io.mem.resp, Some(false))._1,
+      collect(tableJobs(io.mem.primResp.get, leaf = true), io.mem.primResp.get, Some(true))._2)
     else (collect(jobQs(0).io.deq, io.mem.resp, Some(false))._1, collect(jobQs(1).io.deq, io.mem.primResp.get, Some(true))._2)
 
   val boxPipe = Module(new BoxPipe(p))

@@ -6,19 +6,23 @@ import rtaccel.config.PlatformParams
 
 /** A fetch request: a child reference word exactly as stored in the memory image (RefCodec layout).
   * (Named childRef because `ref` is a reserved member of chisel3.Data.)
+  * RESP_ORDER=tagged: `tag` (tagBits > 0) names the requester; every beat of the answer carries it back.
   */
-class FetchReq extends Bundle {
+class FetchReq(tagBits: Int = 0) extends Bundle {
   val childRef = UInt(32.W)
+  val tag = if (tagBits > 0) Some(UInt(tagBits.W)) else None
 }
 
 /** One bus-width beat of fetched data; `last` marks the final beat of its request; `err` = the memory
   * answered it with an error (AXI RRESP other than OKAY): its data must not be used, and a cache that keeps
   * the beat keeps the error with it (poison), so that every later reader sees it too.
+  * RESP_ORDER=tagged: `tag` (tagBits > 0) is the tag of the request the beat answers.
   */
-class FetchBeat(dataBits: Int) extends Bundle {
+class FetchBeat(dataBits: Int, tagBits: Int = 0) extends Bundle {
   val data = UInt(dataBits.W)
   val last = Bool()
   val err = Bool()
+  val tag = if (tagBits > 0) Some(UInt(tagBits.W)) else None
 }
 
 /** A memory read of `beats` consecutive full-width beats from byte address `addr` (beat aligned). */
@@ -32,9 +36,10 @@ class MemReq(addrBits: Int, beatsBits: Int) extends Bundle {
   * reference, saturated to the level code (hw.levelCodeBits, 4 as in the paper's Section 7.2 encoding; 0 for
   * leaves and when the reference format has no level field).
   */
-class PathReq(addrBits: Int, beatsBits: Int, levelBits: Int) extends MemReq(addrBits, beatsBits) {
+class PathReq(addrBits: Int, beatsBits: Int, levelBits: Int, tagBits: Int = 0) extends MemReq(addrBits, beatsBits) {
   val line = UInt(32.W)
   val level = UInt(levelBits.W)
+  val tag = if (tagBits > 0) Some(UInt(tagBits.W)) else None // RESP_ORDER=tagged: the requester
 }
 
 /** Hit/miss counters a path reports (all zero for the pass-through). */
@@ -77,15 +82,20 @@ final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   val leaf: LeafFetch = LeafFetch(p, axi.beatBytes)
   val maxBeats: Int = math.max(nodeBeats, leaf.maxBeats)
   val beatsBits: Int = log2Ceil(maxBeats + 1)
+  /** RESP_ORDER=tagged: bits of the requester tag every request and response beat carries (0: untagged) */
+  val tagBits: Int = p.respTagBits
   def memReq = new MemReq(axi.addrBits, beatsBits)
-  def pathReq = new PathReq(axi.addrBits, beatsBits, p.hw.levelCodeBits)
+  def pathReq = new PathReq(axi.addrBits, beatsBits, p.hw.levelCodeBits, tagBits)
+  /** a beat towards the requester (tagged with RESP_ORDER=tagged) */
+  def respBeat = new FetchBeat(axi.dataBits, tagBits)
 }
 
 /** The interface a node or primitive cache implements to plug into the MC.
   * in:      requests of this path, in global order (addr, beats).
   * memReq:  reads this path wants from DRAM (a miss / fill); memResp: their beats, in memReq order,
   *          with `last` on the final beat of each memReq.
-  * out:     the beats answering `in`, in `in` order, `last` on each request's final beat.
+  * out:     the beats answering `in`, in `in` order, `last` on each request's final beat; RESP_ORDER=tagged: in
+  *          any order, each request's beats back to back and tagged with its `tag`.
   * A path may serve requests without DRAM (hits) and may issue its DRAM reads late, so DRAM order can differ
   * from request order across the two paths. The MC then needs respBufferBeats > 0 (see MemoryController),
   * which guarantees that every R beat has room to land and the shared in-order R channel never blocks.
@@ -98,7 +108,7 @@ class FetchPathIO(g: McGeometry) extends Bundle {
   val stats = Output(new PathStats)
   val memReq = Decoupled(g.memReq)
   val memResp = Flipped(Decoupled(new FetchBeat(g.axi.dataBits)))
-  val out = Decoupled(new FetchBeat(g.axi.dataBits))
+  val out = Decoupled(g.respBeat)
 }
 
 /** What the MC instantiates per path; a cache extends this and is passed to the MC as a factory. */
@@ -106,13 +116,28 @@ abstract class FetchPathModule(val g: McGeometry) extends Module {
   val io = IO(new FetchPathIO(g))
 }
 
-/** For now a pass-through: every request goes to DRAM, every beat straight back. */
+/** The pass-through: every request goes to DRAM, every beat straight back (DRAM answers in order, so with
+  * RESP_ORDER=tagged a FIFO of the requests' tags, as deep as the MC's reads in flight, tags the beats).
+  */
 class FetchPath(g: McGeometry) extends FetchPathModule(g) {
-  io.memReq.valid := io.in.valid
+  private val tags = if (g.tagBits > 0) Some(Module(new Queue(UInt(g.tagBits.W), g.p.hw.mcOutstanding))) else None
+  private val tagReady = tags.fold(true.B)(_.io.enq.ready)
+  io.memReq.valid := io.in.valid && tagReady
   io.memReq.bits.addr := io.in.bits.addr
   io.memReq.bits.beats := io.in.bits.beats
-  io.in.ready := io.memReq.ready
-  io.out <> io.memResp
+  io.in.ready := io.memReq.ready && tagReady
+  io.out.valid := io.memResp.valid
+  io.out.bits.data := io.memResp.bits.data
+  io.out.bits.last := io.memResp.bits.last
+  io.out.bits.err := io.memResp.bits.err
+  io.memResp.ready := io.out.ready
+  for (t <- tags) {
+    t.io.enq.valid := io.in.fire
+    t.io.enq.bits := io.in.bits.tag.get
+    io.out.bits.tag.get := t.io.deq.bits
+    t.io.deq.ready := io.memResp.fire && io.memResp.bits.last
+    when(io.memResp.valid) { assert(t.io.deq.valid, "FetchPath: a DRAM beat with no tagged request outstanding") }
+  }
   io.stats := 0.U.asTypeOf(new PathStats)
 }
 
@@ -198,11 +223,12 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   private val ap = axi
   private val maxOutstanding = p.hw.mcOutstanding
   val io = IO(new Bundle {
-    val req = Flipped(Decoupled(new FetchReq))
+    val req = Flipped(Decoupled(new FetchReq(g.tagBits)))
     // RESP_ORDER=request: every response, in request order; RESP_ORDER=path: the node path's responses only
-    val resp = Decoupled(new FetchBeat(ap.dataBits))
-    // RESP_ORDER=path: the primitive path's responses, in primitive request order
-    val primResp = if (p.respByPath) Some(Decoupled(new FetchBeat(ap.dataBits))) else None
+    // (tagged: in any order, each beat with its request's tag)
+    val resp = Decoupled(g.respBeat)
+    // RESP_ORDER=path: the primitive path's responses, in primitive request order (tagged: in any order)
+    val primResp = if (p.respByPath) Some(Decoupled(g.respBeat)) else None
     val primBase = Input(UInt(ap.addrBits.W))
     val maxLevel = Input(UInt(p.hw.levelCodeBits.W)) // MAX_LEVEL register of the level replacement policy
     val clearCounters = Input(Bool()) // zeroes the counters below and every path's cache statistics
@@ -255,6 +281,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     path.io.in.bits.beats := (if (i == NodePath) g.nodeBeats.U else g.leaf.beats(count))
     path.io.in.bits.line := (if (i == NodePath) nodeId else first).pad(32)
     path.io.in.bits.level := (if (i == NodePath) nodeLevel else 0.U)
+    for (t <- path.io.in.bits.tag) t := io.req.bits.tag.get
     path.io.primBase := io.primBase
     path.io.maxLevel := io.maxLevel
     path.io.clearStats := io.clearCounters

@@ -26,7 +26,7 @@ object RegMap {
 
   /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
   val VersionMajor = 2
-  val VersionMinor = 4
+  val VersionMinor = 5
   val Magic: Long = 0x52544143L // "RTAC"
 
   val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
@@ -51,7 +51,8 @@ object RegMap {
     Field("NODE_QUANT_BITS", 0, 5, "0 = full fp32 nodes, k = NODE_FORMAT=q<k> quantized nodes (docs/numerics.md)"),
     Field("TRI_EXP_BITS", 8, 4, "exponent bits of Möller–Trumbore's format (8 for fp32)"),
     Field("TRI_MAN_BITS", 12, 6, "fraction bits of Möller–Trumbore's format (23 for fp32)"),
-    Field("RESP_ORDER", 18, 1, "0 = the MC answers in request order (the paper's), 1 = RESP_ORDER=path: node and primitive responses each in their own order"),
+    Field("RESP_ORDER", 18, 1, "0 = the MC answers in request order (the paper's), 1 = RESP_ORDER=path or tagged: node and primitive responses each in their own order"),
+    Field("RESP_TAGGED", 19, 1, "1 = RESP_ORDER=tagged: each stream answers in any order, tagged by TU (hits under misses; RESP_ORDER is 1 too)"),
     Field("IUS", 24, 8, "intersection units (IU clusters, each with its own MC and caches; CONFIG0.TUS / IUS TUs each)")))
   val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
     Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,

@@ -49,7 +49,7 @@ object RtAccelTop {
         "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
         "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
       Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
-        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L)))
+        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L), "RESP_TAGGED" -> (if (p.respTagged) 1L else 0L)))
   }
 }
 

@@ -32,6 +32,19 @@ final case class CacheGeometry(c: CacheParams, entriesPerLine: Int, lineBeats: I
   * and, if it allocated, writes them into the data RAM; a hit reads its line from the data RAM. Because data is
   * written and read only in ticket order, a hit always sees the line of the latest earlier fill, even when that
   * fill's DRAM data arrived after the hit was looked up (no stale or wrong data, whatever the latency).
+  *
+  * RESP_ORDER=tagged (hits under misses): the tag stage is the same, so the counts still equal the model's. A hit
+  * whose data line no ticket still has to fill is clean: it goes to a hit queue of its own, read from the data RAM
+  * as soon as the RAM's read port is free, and answered beside the misses, whatever DRAM does. Every other lookup
+  * (a miss, or a hit on a line an older miss is still filling) keeps the in-order ticket queue above. Two hazards,
+  * both checked over every held entry (ScanQueue):
+  *  - read after write: a hit on a line with a fill still in the ticket queue is not clean (it reads in order, after
+  *    the fill, as before);
+  *  - write after read: a fill takes its first DRAM beat only when no queued clean hit reads its data line. No
+  *    younger clean hit can ask for that line meanwhile (its tag now names the filling line: not clean), so once
+  *    the fill starts it runs to its end.
+  * The answers leave through two output queues (clean hits, tickets), merged a whole answer at a time and
+  * alternately when both wait, so neither starves the other.
   */
 class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g0) {
   private val hw = g0.p.hw
@@ -41,6 +54,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
   private val isBf = c.policy == CachePolicy.Bf
   private val isHybrid = c.policy == CachePolicy.Hybrid
   private val lineBits = log2Ceil(cg.dataLines)
+  private val tagged = g.tagBits > 0 // RESP_ORDER=tagged: hits under misses
 
   class Ticket extends Bundle {
     val hit = Bool()
@@ -48,8 +62,13 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
     val silent = Bool()   // preload: fill only, nothing to output
     val line = UInt(math.max(1, lineBits).W)
     val beats = UInt(g.beatsBits.W)
+    val tag = if (tagged) Some(UInt(g.tagBits.W)) else None
   }
-  val ticketQ = Module(new Queue(new Ticket, tickets))
+  // in-order tickets; RESP_ORDER=tagged: a ScanQueue, whose held fills the clean-hit check sees (instance name
+  // ticketQ either way)
+  val ticketScan = if (tagged) Some(Module(new ScanQueue(new Ticket, tickets)).suggestName("ticketQ")) else None
+  private val ticketFifo = if (tagged) None else Some(Module(new Queue(new Ticket, tickets)).suggestName("ticketQ"))
+  private def ticketQ: QueueIO[Ticket] = ticketScan.fold(ticketFifo.get.io)(_.io)
   val missQ = Module(new Queue(g.memReq, hw.cacheMissQueue))
   io.memReq <> missQ.io.deq
 
@@ -65,7 +84,11 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
   val lookLine = Mux(s1Valid, s1.line, io.in.bits.line)
 
   val hit = Wire(Bool()); val fill = Wire(Bool()); val dataLine = Wire(UInt(math.max(1, lineBits).W))
-  val s1Fire = s1Valid && ticketQ.io.enq.ready && (hit || missQ.io.enq.ready)
+  // RESP_ORDER=tagged: a hit is clean when no held ticket still fills its data line; it then waits in the hit
+  // queue, not behind the tickets
+  val hitQ = if (tagged) Some(Module(new ScanQueue(new Ticket, hw.cacheHitQueue))) else None
+  val clean = ticketScan.fold(false.B)(t => hit && !t.io.held.map(e => e.valid && e.bits.fill && e.bits.line === dataLine).reduce(_ || _))
+  val s1Fire = s1Valid && Mux(clean, hitQ.fold(false.B)(_.io.enq.ready), ticketQ.enq.ready && (hit || missQ.io.enq.ready))
   when(s1Fire) { s1Valid := false.B }
 
   if (isBf) {
@@ -108,12 +131,14 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
     }
   }
 
-  ticketQ.io.enq.valid := s1Fire
-  ticketQ.io.enq.bits.hit := hit
-  ticketQ.io.enq.bits.fill := fill
-  ticketQ.io.enq.bits.silent := false.B
-  ticketQ.io.enq.bits.line := dataLine
-  ticketQ.io.enq.bits.beats := s1.beats
+  ticketQ.enq.valid := s1Fire && !clean
+  ticketQ.enq.bits.hit := hit
+  ticketQ.enq.bits.fill := fill
+  ticketQ.enq.bits.silent := false.B
+  ticketQ.enq.bits.line := dataLine
+  ticketQ.enq.bits.beats := s1.beats
+  for (t <- ticketQ.enq.bits.tag) t := s1.tag.get
+  for (q <- hitQ) { q.io.enq.valid := s1Fire && clean; q.io.enq.bits := ticketQ.enq.bits }
   missQ.io.enq.valid := s1Fire && !hit
   missQ.io.enq.bits.addr := s1.addr
   missQ.io.enq.bits.beats := s1.beats
@@ -135,17 +160,17 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
     val more = k < cg.lines.U && kAddr < io.primBase
     when(io.in.valid) { started := true.B }
     val issuing = started && !done
-    val issue = issuing && more && ticketQ.io.enq.ready && missQ.io.enq.ready
+    val issue = issuing && more && ticketQ.enq.ready && missQ.io.enq.ready
     when(issuing && !more) { done := true.B }
     when(issue) { k := k + 1.U }
     ready := done
     when(issue) {
-      ticketQ.io.enq.valid := true.B
-      ticketQ.io.enq.bits.hit := false.B
-      ticketQ.io.enq.bits.fill := true.B
-      ticketQ.io.enq.bits.silent := true.B
-      ticketQ.io.enq.bits.line := k
-      ticketQ.io.enq.bits.beats := cg.lineBeats.U
+      ticketQ.enq.valid := true.B
+      ticketQ.enq.bits.hit := false.B
+      ticketQ.enq.bits.fill := true.B
+      ticketQ.enq.bits.silent := true.B
+      ticketQ.enq.bits.line := k
+      ticketQ.enq.bits.beats := cg.lineBeats.U
       missQ.io.enq.valid := true.B
       missQ.io.enq.bits.addr := kAddr
       missQ.io.enq.bits.beats := cg.lineBeats.U
@@ -155,22 +180,38 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
   // ---------------------------------------------------------------- data: tickets strictly in order
   // each beat is stored with its error bit (MSB): a poisoned beat stays poisoned while it is cached
   val data = SyncReadMem(cg.dataLines << cg.beatBits, UInt((dataBits + 1).W))
-  val outQ = Module(new Queue(new FetchBeat(dataBits), hw.cacheOutQueue))
-  io.out <> outQ.io.deq
-  val head = ticketQ.io.deq.bits
+  val outQ = Module(new Queue(g.respBeat, hw.cacheOutQueue))
+  val head = ticketQ.deq.bits
   val beat = RegInit(0.U(g.beatsBits.W))
   val lastBeat = beat === head.beats - 1.U
   def addr(line: UInt, b: UInt): UInt = if (cg.beatBits == 0) line else Cat(line, b(cg.beatBits - 1, 0))
+  /** a data RAM read may issue when `q` has room for it and for the one in flight: at most depth - 2 beats queued or landing */
+  def room(q: QueueIO[FetchBeat], inflight: Bool): Bool = (q.count +& inflight.asUInt) <= (hw.cacheOutQueue - 2).U
 
   // a data RAM read issued last cycle lands in outQ this cycle; reads are issued only when outQ will have room
   val inflight = RegInit(false.B); val inflightLast = Reg(Bool())
-  // room for the read in flight and this one: at most depth - 2 beats queued or landing
-  val readIssue = ticketQ.io.deq.valid && head.hit && (outQ.io.count +& inflight.asUInt) <= (hw.cacheOutQueue - 2).U
-  val rd = data.read(addr(head.line, beat), readIssue)
+  val readIssue = ticketQ.deq.valid && head.hit && room(outQ.io, inflight)
+  // RESP_ORDER=tagged: the clean hits' reads share the RAM's one read port; an in-order hit's read goes first
+  val hitRead = hitQ.map { q =>
+    val h = q.io.deq.bits
+    val hBeat = RegInit(0.U(g.beatsBits.W))
+    val hOut = Module(new Queue(g.respBeat, hw.cacheOutQueue))
+    val hInflight = RegInit(false.B); val hInflightLast = Reg(Bool()); val hInflightTag = Reg(UInt(g.tagBits.W))
+    val issue = q.io.deq.valid && !readIssue && room(hOut.io, hInflight)
+    val hLast = hBeat === h.beats - 1.U
+    hInflight := issue
+    when(issue) { hInflightLast := hLast; hInflightTag := h.tag.get; hBeat := Mux(hLast, 0.U, hBeat + 1.U) }
+    q.io.deq.ready := issue && hLast
+    (issue, addr(h.line, hBeat), hOut, hInflight, hInflightLast, hInflightTag)
+  }
+  val rd = data.read(hitRead.fold(addr(head.line, beat)) { case (issue, a, _, _, _, _) => Mux(issue, a, addr(head.line, beat)) },
+    readIssue || hitRead.fold(false.B)(_._1))
   inflight := readIssue; when(readIssue) { inflightLast := lastBeat }
 
-  val missHead = ticketQ.io.deq.valid && !head.hit
-  val canTakeMiss = missHead && !inflight && (head.silent || outQ.io.enq.ready)
+  val missHead = ticketQ.deq.valid && !head.hit
+  // RESP_ORDER=tagged: a fill starts only when no queued clean hit still reads its data line (write after read)
+  val fillBlocked = hitQ.fold(false.B)(q => head.fill && beat === 0.U && q.io.held.map(e => e.valid && e.bits.line === head.line).reduce(_ || _))
+  val canTakeMiss = missHead && !inflight && (head.silent || outQ.io.enq.ready) && !fillBlocked
   io.memResp.ready := canTakeMiss
   val missBeat = io.memResp.fire
   when(missBeat && head.fill) { data.write(addr(head.line, beat), Cat(io.memResp.bits.err, io.memResp.bits.data)) }
@@ -179,10 +220,31 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
   outQ.io.enq.bits.data := Mux(inflight, rd(dataBits - 1, 0), io.memResp.bits.data)
   outQ.io.enq.bits.err := Mux(inflight, rd(dataBits), io.memResp.bits.err)
   outQ.io.enq.bits.last := Mux(inflight, inflightLast, lastBeat)
+  for (t <- outQ.io.enq.bits.tag) t := head.tag.get // the ticket's beats leave before the ticket does
 
   val beatDone = readIssue || missBeat
   when(beatDone) { beat := Mux(lastBeat, 0.U, beat + 1.U) }
-  ticketQ.io.deq.ready := beatDone && lastBeat
+  ticketQ.deq.ready := beatDone && lastBeat
+
+  hitRead match {
+    case None => io.out <> outQ.io.deq
+    case Some((_, _, hOut, hInflight, hInflightLast, hInflightTag)) =>
+      hOut.io.enq.valid := hInflight
+      hOut.io.enq.bits.data := rd(dataBits - 1, 0)
+      hOut.io.enq.bits.err := rd(dataBits)
+      hOut.io.enq.bits.last := hInflightLast
+      hOut.io.enq.bits.tag.get := hInflightTag
+      // merge a whole answer at a time: `busy` holds the source until its last beat; when both wait, the one that
+      // did not go last goes (so neither starves the other)
+      val srcs = Seq(outQ.io.deq, hOut.io.deq)
+      val busy = RegInit(false.B); val cur = RegInit(0.U(1.W)); val lastWent = RegInit(1.U(1.W))
+      val pick = Mux(busy, cur, Mux(srcs(0).valid && srcs(1).valid, ~lastWent, Mux(srcs(0).valid, 0.U, 1.U)))
+      io.out.valid := Mux(pick === 0.U, srcs(0).valid, srcs(1).valid)
+      io.out.bits := Mux(pick === 0.U, srcs(0).bits, srcs(1).bits)
+      for ((s, i) <- srcs.zipWithIndex) s.ready := io.out.ready && pick === i.U
+      when(io.out.fire) { busy := !io.out.bits.last; cur := pick; when(io.out.bits.last) { lastWent := pick } }
+      when(hInflight) { assert(hOut.io.enq.ready, "CachePath: a clean hit's data RAM read found its output queue full") }
+  }
 
   when(missBeat) { assert(io.memResp.bits.last === lastBeat, "CachePath: DRAM beats out of step with the ticket") }
   when(inflight) { assert(outQ.io.enq.ready, "CachePath: a data RAM read found the output queue full") }

@@ -1,0 +1,31 @@
+package rtaccel.cache.hw
+
+import chisel3._
+import chisel3.util._
+
+/** A FIFO whose every held entry is visible (`held`: valid = the slot holds an entry), so that a hazard check can
+  * look at all of them in one cycle (RESP_ORDER=tagged, CachePath: a hit against the fills still to be written, a
+  * fill against the hits still to be read). Registers, not a RAM: the check reads every slot at once.
+  * One enqueue and one dequeue per cycle; not flow-through (an entry is held for at least one cycle). Its ports
+  * are a Queue's (QueueIO) plus `held`, so that it can stand where a Queue stood.
+  */
+class ScanQueueIO[T <: Data](gen: T, entries: Int) extends QueueIO(gen, entries) {
+  val held = Output(Vec(entries, Valid(gen)))
+}
+
+class ScanQueue[T <: Data](gen: T, val entries: Int) extends Module {
+  require(entries >= 1, s"a queue needs at least one entry (got $entries)")
+  val io = IO(new ScanQueueIO(gen, entries))
+  private val slots = Reg(Vec(entries, gen))
+  private val full = RegInit(VecInit(Seq.fill(entries)(false.B)))
+  private val ptrBits = math.max(1, log2Ceil(entries))
+  private def next(x: UInt): UInt = if (entries == 1) 0.U else Mux(x === (entries - 1).U, 0.U, x + 1.U)
+  private val head = RegInit(0.U(ptrBits.W)); private val tail = RegInit(0.U(ptrBits.W))
+  io.enq.ready := !full(tail)
+  io.deq.valid := full(head)
+  io.deq.bits := slots(head)
+  when(io.deq.fire) { full(head) := false.B; head := next(head) }
+  when(io.enq.fire) { slots(tail) := io.enq.bits; full(tail) := true.B; tail := next(tail) }
+  io.count := PopCount(full)
+  for (i <- 0 until entries) { io.held(i).valid := full(i); io.held(i).bits := slots(i) }
+}
