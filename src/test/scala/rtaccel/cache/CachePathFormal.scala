@@ -23,14 +23,16 @@ object PathBug {
 
 /** The small configuration the cache-path proofs run on: lines of two 32-bit beats (8-byte stride: the data
   * path's width does not change its control, and narrow beats keep the solver fast), 2 tickets, 2 queued misses,
-  * a 3-beat output queue, 16-bit byte addresses.
+  * a 3-beat output queue (tagged: 2 clean hits queued), 16-bit byte addresses.
   */
 object CachePathFormal {
   val axi: AxiParams = AxiParams(addrBits = 16, dataBits = 32)
   val lineBeats = 2
-  def platform(c: CacheParams): PlatformParams = PlatformParams(m = 2, mppl = 1, nodeCache = c,
+  /** tagged: RESP_ORDER=tagged with two requesters (TUs), so requests and beats carry a 1-bit tag */
+  def platform(c: CacheParams, tagged: Boolean = false): PlatformParams = PlatformParams(m = 2, mppl = 1, nodeCache = c,
+    tus = if (tagged) 2 else 32, respByPath = tagged, respTagged = tagged,
     refs = RefFormat(nodeIdBits = 8, primIndexBits = 8, countBits = 0, levelBits = 0),
-    hw = HwLimits(axiAddrBits = 16, cacheTickets = 2, cacheMissQueue = 2, cacheOutQueue = 3))
+    hw = HwLimits(axiAddrBits = 16, cacheTickets = 2, cacheMissQueue = 2, cacheOutQueue = 3, cacheHitQueue = 2))
   /** requests the path can hold unanswered: the lookup register, every ticket, one per beat of the output queue */
   def maxOutstanding(p: PlatformParams): Int = 1 + p.hw.cacheTickets + p.hw.cacheOutQueue
 }
@@ -44,24 +46,33 @@ object CachePathFormal {
   *  - at most maxOutstanding requests are ever unanswered;
   *  - with bounded stalls (bounds.live): the oldest request is answered within `answerBound` cycles of its
   *    acceptance, so every accepted request is answered exactly once.
+  * tagged (RESP_ORDER=tagged, hits under misses): two requesters, each with at most one request in flight (as a
+  * TU), and answers in any order; the monitor keeps each requester's request and asserts instead that every beat
+  * belongs to a request outstanding under its tag, that an answer's beats come back to back (no other tag in
+  * between), that each answer has exactly its request's beats and the memory's data, and that each request is
+  * answered within `answerBound` cycles of its acceptance.
   * CachePath's own assertions are checked too.
   */
 class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: PathBug = PathBug.None,
-                      lineBits: Int = 4) extends Module {
-  val p = CachePathFormal.platform(c)
+                      lineBits: Int = 4, tagged: Boolean = false) extends Module {
+  val p = CachePathFormal.platform(c, tagged)
   val g = McGeometry(p, CachePathFormal.axi)
   val cg = CacheGeometry(c, 1, CachePathFormal.lineBeats, CachePathFormal.lineBeats * g.axi.beatBytes)
   val io = IO(new Bundle {
     val reqValid = Input(Bool())
     val reqLine = Input(UInt(lineBits.W))
     val reqLevel = Input(UInt(p.hw.levelCodeBits.W))
+    val reqTag = Input(UInt(1.W)) // tagged: the requester
     val maxLevel = Input(UInt(p.hw.levelCodeBits.W))
     val sinkStall = Input(Bool())
     val mem = Input(new MemFree(g.axi.dataBits))
     val bugFire = Input(Bool()) // when the injected fault strikes (unused without one)
   })
   val dut = Module(new CachePath(g, cg))
-  dut.io.in.valid := io.reqValid
+  // tagged: a requester with a request in flight asks for nothing more (set by the monitor below)
+  val busyTag = WireDefault(false.B)
+  dut.io.in.valid := io.reqValid && !busyTag
+  for (t <- dut.io.in.bits.tag) t := io.reqTag
   dut.io.in.bits.line := io.reqLine.pad(32)
   dut.io.in.bits.addr := (io.reqLine.pad(g.axi.addrBits) << log2Ceil(cg.strideBytes))(g.axi.addrBits - 1, 0)
   dut.io.in.bits.beats := cg.lineBeats.U
@@ -75,7 +86,7 @@ class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: 
   mem.serve(dut.io.memReq, dut.io.memResp)
 
   // ---- the output as the monitor sees it (through the injected fault, if any)
-  val out = Wire(Decoupled(new FetchBeat(g.axi.dataBits)))
+  val out = Wire(Decoupled(g.respBeat))
   out.bits := dut.io.out.bits
   out.valid := dut.io.out.valid
   dut.io.out.ready := out.ready
@@ -89,24 +100,19 @@ class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: 
   }
   out.ready := !FormalEnv.stall(io.sinkStall, bounds.sinkStall)
 
-  // ---- monitor: a shadow FIFO of the accepted requests (address, beats, acceptance time)
+  // ---- monitor
   val now = FormalEnv.cycle(6)
   class Pending extends Bundle {
     val addr = UInt(g.axi.addrBits.W)
     val beats = UInt(g.beatsBits.W)
     val time = UInt(now.getWidth.W)
   }
-  val pend = Module(new Queue(new Pending, CachePathFormal.maxOutstanding(p)))
-  pend.io.enq.valid := dut.io.in.fire
-  pend.io.enq.bits.addr := dut.io.in.bits.addr
-  pend.io.enq.bits.beats := dut.io.in.bits.beats
-  pend.io.enq.bits.time := now
-  when(dut.io.in.fire) { assert(pend.io.enq.ready, "more requests unanswered than the path can hold") }
-
+  val pending = Wire(new Pending)
+  pending.addr := dut.io.in.bits.addr
+  pending.beats := dut.io.in.bits.beats
+  pending.time := now
   val beat = RegInit(0.U(g.beatsBits.W))
-  val head = pend.io.deq.bits
-  when(out.fire) {
-    assert(pend.io.deq.valid, "a response beat with no request outstanding")
+  def checkBeat(head: Pending): Unit = {
     assert(out.bits.last === (beat === head.beats - 1.U), "a response with other beats than its request")
     when(mem.beatAddr(head.addr, beat) === mem.magicBeat) {
       assert(out.bits.data === mem.magicData && out.bits.err === mem.magicErr, "a beat differs from the memory")
@@ -114,8 +120,34 @@ class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: 
     beat := Mux(out.bits.last, 0.U, beat + 1.U)
     when(out.bits.last) { answeredOnce := true.B }
   }
-  pend.io.deq.ready := out.fire && out.bits.last
-  if (bounds.live) when(pend.io.deq.valid) {
-    assert(now - head.time <= answerBound.U, s"a request not answered within $answerBound cycles")
+  def timely(head: Pending): Unit = assert(now - head.time <= answerBound.U, s"a request not answered within $answerBound cycles")
+  if (!tagged) {
+    // a shadow FIFO of the accepted requests (address, beats, acceptance time)
+    val pend = Module(new Queue(new Pending, CachePathFormal.maxOutstanding(p)))
+    pend.io.enq.valid := dut.io.in.fire
+    pend.io.enq.bits := pending
+    when(dut.io.in.fire) { assert(pend.io.enq.ready, "more requests unanswered than the path can hold") }
+    val head = pend.io.deq.bits
+    when(out.fire) {
+      assert(pend.io.deq.valid, "a response beat with no request outstanding")
+      checkBeat(head)
+    }
+    pend.io.deq.ready := out.fire && out.bits.last
+    if (bounds.live) when(pend.io.deq.valid) { timely(head) }
+  } else {
+    // each requester's request in flight, and the tag of the answer under way (between its first and last beat)
+    val held = Reg(Vec(2, new Pending)); val holds = RegInit(VecInit(false.B, false.B))
+    busyTag := holds(io.reqTag)
+    val tag = out.bits.tag.get
+    val midAnswer = beat =/= 0.U; val answering = Reg(UInt(1.W))
+    when(out.fire) {
+      assert(holds(tag), "a response beat with no request outstanding under its tag")
+      when(midAnswer) { assert(tag === answering, "another tag's beat inside an answer") }
+      answering := tag
+      checkBeat(held(tag))
+      when(out.bits.last) { holds(tag) := false.B }
+    }
+    when(dut.io.in.fire) { held(io.reqTag) := pending; holds(io.reqTag) := true.B }
+    if (bounds.live) for (t <- 0 until 2) when(holds(t)) { timely(held(t)) }
   }
 }

@@ -31,9 +31,24 @@ class CachePathFormalSpec extends AnyFlatSpec with FormalChecks {
   val depth = configs.head._3
   for (bug <- Seq(PathBug.Spurious, PathBug.Corrupt, PathBug.NoLast))
     it should s"find a counterexample to a ${bug.name}" in refute(new CachePathFormal(dm, live, answerBound, bug), depth)
+
+  // RESP_ORDER=tagged (hits under misses): two requesters, answers in any order; each request answered once, its
+  // beats back to back, with the memory's data, within answerBound cycles (CachePathFormal, tagged)
+  val taggedConfigs = Seq(("direct-mapped, 4 sets", dm, CachePathFormalSpec.taggedDepth, CachePathFormalSpec.taggedDepth + 4),
+    ("2-way LRU, 4 sets", configs(1)._2, 0, 6))
+  for ((name, c, quick, deep) <- taggedConfigs if regress || quick > 0) {
+    val d = if (regress) deep else quick
+    it should s"answer each tagged request once, back to back, with the memory's data, within $answerBound cycles, in any order: $name" in
+      prove(new CachePathFormal(c, live, answerBound, tagged = true), d)
+  }
+  for (bug <- Seq(PathBug.Spurious, PathBug.Corrupt, PathBug.NoLast))
+    it should s"find a counterexample to a ${bug.name} with tagged answers" in
+      refute(new CachePathFormal(dm, live, answerBound, bug, tagged = true), CachePathFormalSpec.taggedDepth)
 }
 
 object CachePathFormalSpec {
   /** cycles from acceptance to the last beat of the answer the proofs promise (stalls of at most one cycle) */
   val answerBound = 16
+  /** the tagged proofs' depth in make test */
+  val taggedDepth = 10
 }

@@ -4,7 +4,7 @@ import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
 import rtaccel.cli.{Cli, Simulate}
 import rtaccel.config.TriTest
-import rtaccel.config.{CacheParams, CachePolicy, Presets}
+import rtaccel.config.{RespOrder, CacheParams, CachePolicy, Presets}
 import rtaccel.model.MemFaults
 import rtaccel.scene.{Rays, Scene}
 
@@ -39,12 +39,12 @@ class PlatformSpec extends AnyFunSuite {
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
                      packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1,
-                     byPath: Boolean = false) = {
+                     order: String = RespOrder.Request) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
       shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels,
-      respByPath = byPath)
+      respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec"))
@@ -248,15 +248,20 @@ class PlatformSpec extends AnyFunSuite {
       checkClusters(j, ius, ch, node, prim)
     }
 
-  // RESP_ORDER=path (docs/platform.md): node and leaf responses in two streams; bit-exact, and the caches' counts
-  // still equal the model replaying the RTL's own order. make test: IUS=2 with caches under jitter and backpressure.
-  private val pathCases = Seq((2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
-    (if (!full) Nil else Seq((1, 4, CacheParams(), CacheParams(), 17, 20), (1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
-      (2, 4, CacheParams(), CacheParams(), 0, 0)))
-  for ((ius, tus, node, prim, jitter, stall) <- pathCases)
-    test(s"RESP_ORDER=path, IUS=$ius at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts equal the model") {
-      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, byPath = true).json
-      assert(j("resp_order").str == "path", ujson.write(j))
+  // RESP_ORDER=path and tagged (docs/platform.md): node and leaf responses in two streams (tagged: each in any
+  // order, hits under misses); bit-exact, and the caches' counts still equal the model replaying the RTL's own
+  // order. make test: IUS=2 with caches under jitter and backpressure for path, IUS=1 with both caches for tagged.
+  private val (path, tagged) = (RespOrder.Path, RespOrder.Tagged)
+  private val pathCases = Seq((path, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
+    (tagged, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30)) ++
+    (if (!full) Nil else Seq((path, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
+      (path, 2, 4, CacheParams(), CacheParams(), 0, 0), (tagged, 1, 4, CacheParams(), CacheParams(), 17, 20),
+      (tagged, 2, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25),
+      (tagged, 1, 8, CacheParams(32, 1, CachePolicy.Hybrid), CacheParams(16, 4, CachePolicy.Plru), 0, 0)))
+  for ((order, ius, tus, node, prim, jitter, stall) <- pathCases)
+    test(s"RESP_ORDER=$order, IUS=$ius at $tus TUs (node ${node.entries}${if (node.entries > 0) " " + node.policy else ""}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts equal the model") {
+      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, order = order).json
+      assert(j("resp_order").str == order, ujson.write(j))
       checkClusters(j, ius, 1, node, prim)
     }
 

@@ -220,7 +220,12 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
   outQ.io.enq.bits.data := Mux(inflight, rd(dataBits - 1, 0), io.memResp.bits.data)
   outQ.io.enq.bits.err := Mux(inflight, rd(dataBits), io.memResp.bits.err)
   outQ.io.enq.bits.last := Mux(inflight, inflightLast, lastBeat)
-  for (t <- outQ.io.enq.bits.tag) t := head.tag.get // the ticket's beats leave before the ticket does
+  // a DRAM beat is the head ticket's; a data RAM read lands a cycle after its issue, when an in-order hit's last
+  // read has already let its ticket go: the tag is kept with the read
+  for (t <- outQ.io.enq.bits.tag) {
+    val inflightTag = RegEnable(head.tag.get, readIssue)
+    t := Mux(inflight, inflightTag, head.tag.get)
+  }
 
   val beatDone = readIssue || missBeat
   when(beatDone) { beat := Mux(lastBeat, 0.U, beat + 1.U) }
