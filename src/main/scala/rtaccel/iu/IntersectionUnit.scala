@@ -14,8 +14,8 @@ import rtaccel.mc.{FetchBeat, FetchReq}
   * RESP_ORDER=path: a job FIFO and a collection per kind (nodes, leaves), each fed by its own MC stream, so a
   * node's box test never waits for an older leaf's data; up to `maxOutstanding` jobs of each kind.
   * RESP_ORDER=tagged: the two streams answer in any order, each beat tagged with its requester (the arbiter's
-  * input: a TU has one request in flight); a job table of one entry per requester (LUTRAM) replaces the FIFOs and
-  * each collection reads its job by the beat's tag.
+  * input: a TU has one request in flight); a job table per kind of one entry per requester (LUTRAM) replaces the
+  * FIFOs and each collection reads its job by the beat's tag.
   */
 class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extends Module {
   private val maxOutstanding = p.hw.iuOutstanding
@@ -71,17 +71,20 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     q.io.enq.bits := newJob
   }
   arb.io.out.ready := io.mem.req.ready && jobReady
-  // RESP_ORDER=tagged: a requester's job waits in its table entry until its answer; each collection sees a job
-  // stream whose head is the job its beat's tag names, valid while a job of its kind is outstanding
-  // (at least 2 entries: a 1-bit tag addresses it)
-  val jobTable = if (p.respTagged) Some(Mem(math.max(2, requesters), new Job)) else None
-  for (t <- jobTable) when(io.mem.req.fire) { t.write(arb.io.chosen, newJob) }
+  // RESP_ORDER=tagged: a requester's job waits in its entry of its kind's table (nodes, leaves: each stores only
+  // the fields its collection reads) until its answer; each collection sees a job stream whose head is the job its
+  // beat's tag names, valid while a job of its kind is outstanding (at least 2 entries: a 1-bit tag addresses them)
+  val jobTables = if (p.respTagged) Seq(false, true).map { leaf =>
+    val t = Mem(math.max(2, requesters), new Job).suggestName(if (leaf) "jobs_leaf" else "jobs_node")
+    when(io.mem.req.fire && reqIsLeaf === leaf.B) { t.write(arb.io.chosen, newJob) }
+    t
+  } else Nil
   def tableJobs(beats: DecoupledIO[FetchBeat], leaf: Boolean): DecoupledIO[Job] = {
     val jobs = Wire(Decoupled(new Job))
     val outstanding = RegInit(0.U(log2Ceil(requesters + 1).W))
     outstanding := outstanding + (io.mem.req.fire && reqIsLeaf === leaf.B).asUInt - jobs.fire.asUInt
     jobs.valid := outstanding =/= 0.U
-    jobs.bits := jobTable.get(beats.bits.tag.get)
+    jobs.bits := jobTables(if (leaf) 1 else 0)(beats.bits.tag.get)
     jobs
   }
 

@@ -50,5 +50,5 @@ object CachePathFormalSpec {
   /** cycles from acceptance to the last beat of the answer the proofs promise (stalls of at most one cycle) */
   val answerBound = 16
   /** the tagged proofs' depth in make test */
-  val taggedDepth = 10
+  val taggedDepth = 4
 }

@@ -93,6 +93,16 @@ class ThroughputSpec extends AnyFunSuite {
       assert(path.inFlightLimit == math.min(tus, 2 * p.hw.iuOutstanding) && req.inFlightLimit == math.min(tus, p.hw.iuOutstanding))
       if (tus == 1) assert(path.raysPerCycle == req.raysPerCycle) // one ray: nothing to overtake
     }
+    // RESP_ORDER=tagged: no hit waits, every TU's access may be in flight, at least path's rays
+    for (tus <- Seq(1, 8, 32, 64)) {
+      val path = Throughput.predict(p.copy(respByPath = true), sk.counts, rays = 64, tus = tus)
+      val tagged = Throughput.predict(p.copy(respByPath = true, respTagged = true), sk.counts, rays = 64, tus = tus)
+      assert(tagged.holCyclesPerRay == 0.0 && tagged.inFlightLimit == tus, s"TUs=$tus: $tagged")
+      assert(tagged.raysPerCycle >= path.raysPerCycle * (1 - 1e-12), s"TUs=$tus: tagged ${tagged.raysPerCycle} < path ${path.raysPerCycle}")
+      // however many TUs, never past the DRAM's bound
+      assert(tagged.raysPerCycle <= (1 + 1e-12) / tagged.dramCycles, s"TUs=$tus: $tagged")
+      if (tus == 1) assert(math.abs(tagged.raysPerCycle - 1 / tagged.latencyCycles) <= 1e-12 / tagged.latencyCycles, s"one TU: 1 / latency, $tagged")
+    }
   }
 
   /** An event simulation of the network the model abstracts: n TUs with one access outstanding each; accesses
