@@ -57,9 +57,10 @@ yosys:
 	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq yosys >/dev/null; }
 
 # z3 runs the bounded proofs of src/test/scala/**/*FormalSpec.scala (docs/formal.md) in make test and make regress.
+# the formal specs' solvers (docs/formal.md): z3 for most checks, CVC4 for the tagged cache path's
 z3:
-	@command -v z3 >/dev/null || { echo "[deps] installing z3 from apt"; \
-	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq z3 >/dev/null; }
+	@command -v z3 >/dev/null && command -v cvc4 >/dev/null || { echo "[deps] installing z3 and cvc4 from apt"; \
+	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq z3 cvc4 >/dev/null; }
 
 # Compiles the Scala side and records its runtime classpath so entry points start as plain `java`.
 $(CP_FILE): $(SCALA_SRC)

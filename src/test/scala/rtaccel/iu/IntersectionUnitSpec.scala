@@ -10,6 +10,7 @@ import scala.collection.mutable
 import scala.util.Random
 import rtaccel.TestScenes
 import rtaccel.bvh.{Mbvh, MemoryImage, RefCodec}
+import rtaccel.config.RespOrder
 import rtaccel.config.{Fit, PlatformParams}
 import rtaccel.model.{PreparedRay, RayBox, RayTriangle}
 
@@ -38,7 +39,7 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   private def sim(p: PlatformParams, beatBits: Int) = {
     val r = p.refs
     Seq(VerilatorBackendAnnotation, VerilatorCFlags(Seq("-O1")), CachingAnnotation, TargetDirAnnotation(
-      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}${if (p.respByPath) "-rpath" else ""}"))
+      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}${if (p.respByPath) s"-r${p.respOrder}" else ""}"))
   }
 
   private def soupImage(seed: Long, p0: PlatformParams, fit: Boolean): MemoryImage = {
@@ -49,9 +50,13 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
 
   /** Random traffic on the IU; `errPercent` of the memory beats come back with err. respByPath (RESP_ORDER=path):
     * node beats and leaf beats come on their own ports, each in its own request order, the leaves' slower, so that
-    * node beats are taken ahead of older leaves' (counted in Stats.overtakes). */
-  private def run(img: MemoryImage, beatBits: Int, requests: Int, seed: Long, errPercent: Int, respByPath: Boolean = false): Stats = {
-    val p = img.p.copy(respByPath = respByPath)
+    * node beats are taken ahead of older leaves' (counted in Stats.overtakes). RESP_ORDER=tagged: the two ports,
+    * and each port answers in any order: a new answer goes in at a random answer boundary of its port's queue (not
+    * into the answer under way), its beats tagged with the TU; a result is expected once its answer's first beat is
+    * taken (Stats.overtakes: answers placed ahead of an older one). */
+  private def run(img: MemoryImage, beatBits: Int, requests: Int, seed: Long, errPercent: Int, order: String = RespOrder.Request): Stats = {
+    val respByPath = order != RespOrder.Request; val tagged = order == RespOrder.Tagged
+    val p = img.p.copy(respByPath = respByPath, respTagged = tagged)
     val rnd = new Random(seed)
     val codec = new RefCodec(p.refs)
     val m = p.m
@@ -72,7 +77,10 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
       val boxQ = mutable.Queue[BoxExp](); val triQ = mutable.Queue[TriExp]()
       // per response port (RESP_ORDER=path: 0 nodes, 1 leaves): beats owed, cycle of the next, one shown
       val ports = dut.io.mem.resp +: dut.io.mem.primResp.toSeq
-      val beatQs = ports.map(_ => mutable.Queue[(BigInt, Boolean, Boolean, Int)]()) // data, last, err, request number
+      val beatQs = ports.map(_ => mutable.ArrayBuffer[(BigInt, Boolean, Boolean, Int, Int)]()) // data, last, err, request number, tag
+      // tagged: the results each request's answer will bring, expected when its first beat is taken
+      val deferred = mutable.Map[Int, mutable.ArrayBuffer[() => Unit]]()
+      def expect(req: Int)(e: => Unit): Unit = if (tagged) deferred.getOrElseUpdate(req, mutable.ArrayBuffer()) += (() => e) else e
       val beatAt = Array.fill(ports.length)(0L); val beatShown = Array.fill(ports.length)(false)
       var issued = 0
       var lastProgress = 0L // cycle of the last result
@@ -119,8 +127,9 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
         if (memReady != lastMemReady) { dut.io.mem.req.ready.poke(memReady.B); lastMemReady = memReady }
         val showBeat = ports.indices.map(k => beatQs(k).nonEmpty && cycle >= beatAt(k))
         for ((port, k) <- ports.zipWithIndex) if (showBeat(k) && !beatShown(k)) {
-          val (d, last, err, _) = beatQs(k).head
+          val (d, last, err, _, tag) = beatQs(k).head
           port.bits.data.poke(d.U(beatBits.W)); port.bits.last.poke(last.B); port.bits.err.poke(err.B)
+          for (t <- port.bits.tag) t.poke(tag.U)
           port.valid.poke(true.B); beatShown(k) = true
         }
         // ---- observe
@@ -137,9 +146,18 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
             else img.prims.slice(codec.firstPrim(ref) * primWords, (codec.firstPrim(ref) + codec.count(ref)) * primWords).toSeq
           val nBeats = words.length / beatWords
           val bad = Seq.fill(nBeats)(rnd.nextInt(100) < errPercent)
-          for (b <- 0 until nBeats) {
+          val answer = (0 until nBeats).map { b =>
             val data = (0 until beatWords).map(w => u32(words(b * beatWords + w)) << (32 * w)).sum
-            beatQs(if (respByPath && codec.isPrim(ref)) 1 else 0).enqueue((if (bad(b)) data ^ ((BigInt(1) << beatBits) - 1) else data, b == nBeats - 1, bad(b), st.requests))
+            (if (bad(b)) data ^ ((BigInt(1) << beatBits) - 1) else data, b == nBeats - 1, bad(b), st.requests, i)
+          }
+          val bq = beatQs(if (respByPath && codec.isPrim(ref)) 1 else 0)
+          if (!tagged) bq ++= answer else {
+            // answer boundaries after the answer under way (its first beat shown or taken), and the end
+            val underWay = bq.nonEmpty && (beatShown(if (bq eq beatQs(0)) 0 else 1) || deferred.get(bq.head._4).isEmpty)
+            val bounds = (0 to bq.length).filter(j => (j == 0 || bq(j - 1)._2) && !(j == 0 && underWay))
+            val at = bounds(rnd.nextInt(bounds.length))
+            if (at < bq.length) st = st.copy(overtakes = st.overtakes + 1)
+            bq.insertAll(at, answer)
           }
           def unitBad(u: Int, unitWords: Int) = (u * unitWords / beatWords until (u + 1) * unitWords / beatWords).exists(bad)
           val what = f"TU $i ref 0x$ref%08x"
@@ -152,7 +170,7 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
               val tn = if (cr == 0 || err) Float.NaN else RayBox.test(q.r, q.tmax, w(0), w(1), w(2), w(3), w(4), w(5))
               (!tn.isNaN, fbits(tn), cr)
             }
-            boxQ.enqueue(BoxExp(i, res.map(_._1), res.map(_._2), res.map(_._3), err, s"$what node $id"))
+            expect(st.requests)(boxQ.enqueue(BoxExp(i, res.map(_._1), res.map(_._2), res.map(_._3), err, s"$what node $id")))
             tuWait(i) = 1
             st = st.copy(nodes = st.nodes + 1, boxHits = st.boxHits + res.count(_._1), badNodes = st.badNodes + (if (err) 1 else 0))
           } else {
@@ -161,7 +179,8 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
             for (k <- 0 until n) {
               val s = first + k; val o = new RayTriangle.Result
               val hit = !errs(k) && RayTriangle.test(q.r, q.tmax, c => img.primCoord(s, c), o)
-              triQ.enqueue(TriExp(i, hit, fbits(o.t), fbits(o.u), fbits(o.v), img.primId(s), k == n - 1, errs(k), s"$what primitive slot $s"))
+              val e = TriExp(i, hit, fbits(o.t), fbits(o.u), fbits(o.v), img.primId(s), k == n - 1, errs(k), s"$what primitive slot $s")
+              expect(st.requests)(triQ.enqueue(e))
               if (hit) st = st.copy(triHits = st.triHits + 1)
             }
             tuWait(i) = n
@@ -172,8 +191,9 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
           tuReq(i) = None
         } else if (fired.nonEmpty) fail(s"TU ports ${fired.mkString(",")} taken without a memory request")
         for ((port, k) <- ports.zipWithIndex) if (showBeat(k) && port.ready.peek().litToBoolean) {
-          val taken = beatQs(k).dequeue(); beatShown(k) = false
-          if (k == 0 && beatQs.length > 1 && beatQs(1).headOption.exists(_._4 < taken._4)) st = st.copy(overtakes = st.overtakes + 1)
+          val taken = beatQs(k).remove(0); beatShown(k) = false
+          for (es <- deferred.remove(taken._4); e <- es) e() // tagged: the answer's first beat
+          if (!tagged && k == 0 && beatQs.length > 1 && beatQs(1).headOption.exists(_._4 < taken._4)) st = st.copy(overtakes = st.overtakes + 1)
           // RESP_ORDER=path: the leaf port is the slow one (a primitive miss), so that nodes overtake
           beatAt(k) = cycle + 1 + (if (rnd.nextInt(3) == 0) rnd.nextInt(8) else 0) + (if (k == 1) rnd.nextInt(12) else 0)
         }
@@ -223,7 +243,8 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   private def report(s: Stats): String =
     s"${s.requests} requests (${s.nodes} nodes, ${s.prims} primitives), ${s.boxHits} child hits, ${s.triHits} triangle hits, " +
       s"${s.badNodes} poisoned nodes, ${s.badPrims} poisoned primitives (${s.mixedLeaves} leaves part poisoned), " +
-      s"up to ${s.maxOutstanding} requests outstanding, ${s.cycles} cycles, ${s.overtakes} node beats taken ahead of an older leaf's"
+      s"up to ${s.maxOutstanding} requests outstanding, ${s.cycles} cycles, ${s.overtakes} answers ahead of an older one " +
+      "(path: node beats taken ahead of an older leaf's; tagged: answers placed ahead of an older one on their port)"
 
   private val regress = rtaccel.Regress.full
   // make regress adds M=8 on 128-bit beats and the quantized node (make test meets q8 in PlatformSpec and NodeDecodeSpec)
@@ -251,10 +272,19 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   // RESP_ORDER=path: two beat streams; each kind's results in its own order, nodes overtaking slower leaves
   test("RESP_ORDER=path, TUs=4 M=4: node and leaf beats on their own ports; results equal the model, node beats taken ahead of older leaves' (1500 requests, seed 6)") {
     val img = soupImage(6L, PlatformParams(tus = 4, m = 4, mppl = 4), fit = false)
-    val s = run(img, 256, 1500, 6L, errPercent = 3, respByPath = true)
+    val s = run(img, 256, 1500, 6L, errPercent = 3, order = RespOrder.Path)
     info(report(s))
     assert(s.boxHits > 0 && s.triHits > 0 && s.badNodes > 0 && s.badPrims > 0)
     assert(s.overtakes > 0, "no node beat was taken ahead of an older leaf's: the two kinds are not independent")
+  }
+
+  // RESP_ORDER=tagged: each port answers in any order, whole answers tagged by TU; the job tables route each one
+  test("RESP_ORDER=tagged, TUs=5 M=4: answers in random order on each port, tagged by TU; results equal the model (1500 requests, seed 7)") {
+    val img = soupImage(7L, PlatformParams(tus = 5, m = 4, mppl = 4), fit = false)
+    val s = run(img, 256, 1500, 7L, errPercent = 3, order = RespOrder.Tagged)
+    info(report(s))
+    assert(s.boxHits > 0 && s.triHits > 0 && s.badNodes > 0 && s.badPrims > 0)
+    assert(s.overtakes > 50, s"only ${s.overtakes} answers were placed ahead of an older one: the test does not reorder")
   }
 
   test("no memory errors: every result is clean, TUs=4 M=4 (1000 requests, seed 4)") {
