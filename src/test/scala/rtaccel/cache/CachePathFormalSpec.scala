@@ -34,7 +34,7 @@ class CachePathFormalSpec extends AnyFlatSpec with FormalChecks {
 
   // RESP_ORDER=tagged (hits under misses): two requesters, answers in any order; each request answered once, its
   // beats back to back, with the memory's data, within answerBound cycles (CachePathFormal, tagged)
-  val taggedConfigs = Seq(("direct-mapped, 4 sets", dm, CachePathFormalSpec.taggedDepth, CachePathFormalSpec.taggedDepth + 4),
+  val taggedConfigs = Seq(("direct-mapped, 4 sets", dm, CachePathFormalSpec.taggedDepth, CachePathFormalSpec.taggedDepth),
     ("2-way LRU, 4 sets", configs(1)._2, 0, 6))
   for ((name, c, quick, deep) <- taggedConfigs if regress || quick > 0) {
     val d = if (regress) deep else quick
