@@ -48,6 +48,11 @@ object Cli {
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus), ius = a.int("ius", base.ius), memChannels = a.int("mem-channels", base.memChannels),
       respByPath = respOrder.fold(base.respByPath)(_ != RespOrder.Request),
       respTagged = respOrder.fold(base.respTagged)(_ == RespOrder.Tagged),
+      rayStore = a.opt("ray-store").map {
+        case "0" => false
+        case "1" => true
+        case v => throw new InputError(s"RAY_STORE=$v: use 1 (rays kept in each IU's ray store, requests carry the TU's index) or 0 (every request carries its ray, the paper's)")
+      }.getOrElse(base.rayStore),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),

@@ -120,7 +120,10 @@ final case class PlatformParams(
   // RESP_ORDER=tagged (with respByPath): each stream answers in any order, every beat tagged with the requesting TU
   // (each TU has one request in flight), so a cache hit never waits behind an older miss of its own path either
   // (hits under misses; docs/platform.md, "Response order")
-  respTagged: Boolean = false
+  respTagged: Boolean = false,
+  // RAY_STORE=1: each IU keeps its TUs' rays in a ray store (one entry per TU, written by the TC as it hands a ray
+  // out); a request carries the TU's index, the reference and tmax, not the ray (docs/platform.md, "Ray store")
+  rayStore: Boolean = false
 ) {
   require(!respTagged || respByPath, "RESP_ORDER=tagged answers on the two path streams; set respByPath with respTagged")
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),

@@ -16,6 +16,8 @@ import rtaccel.mc.{FetchBeat, FetchReq}
   * RESP_ORDER=tagged: the two streams answer in any order, each beat tagged with its requester (the arbiter's
   * input: a TU has one request in flight); a job table per kind of one entry per requester (LUTRAM) replaces the
   * FIFOs and each collection reads its job by the beat's tag.
+  * RAY_STORE=1: requests and jobs carry no ray; the ray store (LUTRAM, one entry per requester, written through
+  * `rays` as the TC hands a TU its ray) is read by the job's TU index as each node or primitive is assembled.
   */
 class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extends Module {
   private val maxOutstanding = p.hw.iuOutstanding
@@ -28,6 +30,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
       val resp = Flipped(Decoupled(new FetchBeat(beatBits, p.respTagBits))) // RESP_ORDER=path: node beats only
       val primResp = if (p.respByPath) Some(Flipped(Decoupled(new FetchBeat(beatBits, p.respTagBits)))) else None // RESP_ORDER=path
     }
+    val rays = if (p.rayStore) Some(Flipped(Valid(new RayWrite(requesters)))) else None // RAY_STORE=1
   })
   private val beatWords = beatBits / 32
   private val nodeWords = p.nodeSlotBytes / 4 // the stored node: full, or quantized (NodeDecode)
@@ -43,7 +46,18 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     val isLeaf = Bool()
     val lastPrim = UInt(math.max(1, p.refs.countBits).W) // primitive count - 1
     val tmax = UInt(32.W)
-    val ray = new RayData
+    val ray = if (p.rayStore) None else Some(new RayData)
+  }
+  // RAY_STORE=1: the rays of this IU's requesters, by index; a TU's entry changes only while it is idle
+  val rayStore = io.rays.map { w =>
+    val s = Mem(math.max(2, requesters), new RayData).suggestName("ray_store")
+    when(w.valid) { s.write(w.bits.slot, w.bits.ray) }
+    s
+  }
+  def rayOf(job: Job): RayData = rayStore.fold(job.ray.get) { s =>
+    val slot = Wire(UInt(RayWrite.slotBits(requesters).W))
+    slot := job.tu // a TU's index within the cluster: the low bits (the store has one entry per requester)
+    s(slot)
   }
   // one FIFO for every job (RESP_ORDER=request), or FIFO 0 for nodes and FIFO 1 for leaves (RESP_ORDER=path)
   // (instance names: `jobs` as before RESP_ORDER existed, `jobs_node` / `jobs_leaf` with path)
@@ -64,7 +78,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   newJob.isLeaf := reqIsLeaf
   newJob.lastPrim := (if (p.refs.countBits == 0) 0.U else r.cref(p.refs.primIndexBits + p.refs.countBits - 1, p.refs.primIndexBits))
   newJob.tmax := r.tmax
-  newJob.ray := r.ray
+  for ((j, q) <- newJob.ray.zip(r.ray)) j := q
   for ((q, i) <- jobQs.zipWithIndex) {
     val mine = if (p.respByPath) reqIsLeaf === (i == 1).B else true.B
     q.io.enq.valid := arb.io.out.valid && io.mem.req.ready && mine
@@ -127,7 +141,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
 
     val node = Wire(new NodeJob(p))
     node.tu := job.tu
-    node.ray := job.ray
+    node.ray := rayOf(job)
     node.tmax := job.tmax
     node.words := VecInit(words.take(nodeWords))
     node.err := unitErr
@@ -135,7 +149,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     val tri = Wire(Valid(new TriJob(p)))
     tri.valid := unitDone && isLeaf
     tri.bits.tu := job.tu
-    tri.bits.ray := job.ray
+    tri.bits.ray := rayOf(job)
     tri.bits.tmax := job.tmax
     tri.bits.words := VecInit(words.take(10))
     tri.bits.last := jobDone
@@ -146,7 +160,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
       asm.io.in.bits.beat := beats.bits
       asm.io.in.bits.lastPrim := job.lastPrim
       asm.io.in.bits.ctx.tu := job.tu
-      asm.io.in.bits.ctx.ray := job.ray
+      asm.io.in.bits.ctx.ray := rayOf(job)
       asm.io.in.bits.ctx.tmax := job.tmax
       beats.ready := jobs.valid && (!isLeaf || asm.io.in.ready)
       jobs.ready := Mux(isLeaf, asm.io.leafTaken, jobDone)

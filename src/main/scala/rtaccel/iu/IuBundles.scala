@@ -11,12 +11,27 @@ class RayData extends Bundle {
   val tmin = UInt(32.W)
 }
 
-/** One TU request: intersect `ray` (within [tmin, tmax]) with the node or leaf that `ref` names. */
+/** One TU request: intersect `ray` (within [tmin, tmax]) with the node or leaf that `ref` names.
+  * RAY_STORE=1: no ray; the IU reads the ray of TU `tu` from its ray store.
+  */
 class IuReq(p: PlatformParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
   val cref = UInt(32.W)
   val tmax = UInt(32.W)
+  val ray = if (p.rayStore) None else Some(new RayData)
+}
+
+/** RAY_STORE=1: the ray the TC hands to the TU of index `slot` within an IU's cluster, written into that IU's ray
+  * store in the same cycle (the TU is idle then, so none of its jobs still reads the entry).
+  */
+class RayWrite(slots: Int) extends Bundle {
+  val slot = UInt(RayWrite.slotBits(slots).W)
   val ray = new RayData
+}
+
+object RayWrite {
+  /** index bits of a ray store of `slots` entries (at least 2 entries, so at least 1 bit) */
+  def slotBits(slots: Int): Int = chisel3.util.log2Ceil(math.max(2, slots))
 }
 
 /** Slab-test results for the M children of a node, in slot order. */

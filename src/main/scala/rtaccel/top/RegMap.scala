@@ -26,7 +26,7 @@ object RegMap {
 
   /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
   val VersionMajor = 2
-  val VersionMinor = 5
+  val VersionMinor = 6
   val Magic: Long = 0x52544143L // "RTAC"
 
   val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
@@ -53,6 +53,7 @@ object RegMap {
     Field("TRI_MAN_BITS", 12, 6, "fraction bits of Möller–Trumbore's format (23 for fp32)"),
     Field("RESP_ORDER", 18, 1, "0 = the MC answers in request order (the paper's), 1 = RESP_ORDER=path or tagged: node and primitive responses each in their own order"),
     Field("RESP_TAGGED", 19, 1, "1 = RESP_ORDER=tagged: each stream answers in any order, tagged by TU (hits under misses; RESP_ORDER is 1 too)"),
+    Field("RAY_STORE", 20, 1, "1 = RAY_STORE=1: each IU keeps its TUs' rays in a ray store; requests carry the TU's index, not the ray"),
     Field("IUS", 24, 8, "intersection units (IU clusters, each with its own MC and caches; CONFIG0.TUS / IUS TUs each)")))
   val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
     Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,

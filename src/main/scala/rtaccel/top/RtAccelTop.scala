@@ -49,7 +49,8 @@ object RtAccelTop {
         "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
         "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
       Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
-        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L), "RESP_TAGGED" -> (if (p.respTagged) 1L else 0L)))
+        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L), "RESP_TAGGED" -> (if (p.respTagged) 1L else 0L),
+        "RAY_STORE" -> (if (p.rayStore) 1L else 0L)))
   }
 }
 
@@ -108,6 +109,15 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     iu.io.req(k) <> tu.io.req
     tu.io.box := iu.io.box
     tu.io.tri := iu.io.tri
+  }
+  // RAY_STORE=1: the TC hands out at most one ray per cycle; the cluster of the TU that takes it stores it
+  for ((iu, c) <- ius.zipWithIndex; w <- iu.io.rays) {
+    val mine = tc.io.tuRay.slice(c * p.tusPerIu, (c + 1) * p.tusPerIu)
+    val fires = mine.map(_.fire)
+    assert(PopCount(fires) <= 1.U, "the TC handed out two rays in one cycle")
+    w.valid := fires.reduce(_ || _)
+    w.bits.slot := (if (mine.size == 1) 0.U else OHToUInt(fires))
+    w.bits.ray := mine.head.bits.ray // the TC offers every TU the same ray
   }
   for ((iu, mc) <- ius.zip(mcs)) {
     mc.io.req <> iu.io.mem.req

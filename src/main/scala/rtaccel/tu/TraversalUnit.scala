@@ -81,7 +81,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.req.bits.tu := index
   io.req.bits.cref := cur
   io.req.bits.tmax := tmax
-  io.req.bits.ray := r.ray
+  io.req.bits.ray.foreach(_ := r.ray) // RAY_STORE=1: the IU's ray store has it, and r.ray is never read
   when(io.req.fire) { state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox) }
 
   // Node: stable rank of each hit child = hit children nearer, or equally near in an earlier slot.

@@ -53,10 +53,13 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     * node beats are taken ahead of older leaves' (counted in Stats.overtakes). RESP_ORDER=tagged: the two ports,
     * and each port answers in any order: a new answer goes in at a random answer boundary of its port's queue (not
     * into the answer under way), its beats tagged with the TU; a result is expected once its answer's first beat is
-    * taken (Stats.overtakes: answers placed ahead of an older one). */
-  private def run(img: MemoryImage, beatBits: Int, requests: Int, seed: Long, errPercent: Int, order: String = RespOrder.Request): Stats = {
+    * taken (Stats.overtakes: answers placed ahead of an older one). rayStore (RAY_STORE=1): a TU's request carries
+    * no ray; the test writes the TU's ray into the IU's ray store as it presents the request (one write per cycle,
+    * as the TC hands out rays), and the results must still be those of that ray. */
+  private def run(img: MemoryImage, beatBits: Int, requests: Int, seed: Long, errPercent: Int, order: String = RespOrder.Request,
+      rayStore: Boolean = false): Stats = {
     val respByPath = order != RespOrder.Request; val tagged = order == RespOrder.Tagged
-    val p = img.p.copy(respByPath = respByPath, respTagged = tagged)
+    val p = img.p.copy(respByPath = respByPath, respTagged = tagged, rayStore = rayStore)
     val rnd = new Random(seed)
     val codec = new RefCodec(p.refs)
     val m = p.m
@@ -91,8 +94,10 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
         if (cycle > lastProgress + 5000) fail(s"stuck: ${boxQ.length} box and ${triQ.length} triangle results owed, ${beatQs.map(_.length).sum} beats " +
           s"unsent (shown: ${beatShown.mkString(",")}, taken: ${ports.map(_.ready.peek().litToBoolean).mkString(",")}), TUs owed ${tuWait.mkString(",")}, " +
           s"presenting ${tuReq.map(_.nonEmpty).mkString(",")}")
-        // ---- TU ports: a new request when idle, held until taken
-        for (i <- 0 until p.tus) if (tuReq(i).isEmpty && tuWait(i) == 0 && cycle >= tuNext(i) && issued < requests) {
+        // ---- TU ports: a new request when idle, held until taken (RAY_STORE=1: one TU a cycle writes its ray)
+        var storeFree = true
+        for (w <- dut.io.rays) w.valid.poke(false.B)
+        for (i <- 0 until p.tus) if (tuReq(i).isEmpty && tuWait(i) == 0 && cycle >= tuNext(i) && issued < requests && storeFree) {
           val k = rnd.nextInt(rays.count)
           val tmax = rnd.nextInt(5) match { case 0 => rnd.nextFloat() * 8; case 1 => 0f; case _ => Float.PositiveInfinity }
           val tmin = if (rnd.nextInt(5) == 0) rnd.nextFloat() * 2 else 0f
@@ -115,10 +120,14 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
           val q = dut.io.req(i).bits
           q.tu.poke(i.U) // a TU writes its own index
           q.cref.poke(u32(cref).U); q.tmax.poke(u32(fbits(tmax)).U)
-          for ((x, a) <- Seq(r.ox, r.oy, r.oz).zipWithIndex) q.ray.o(a).poke(u32(fbits(x)).U)
-          for ((x, a) <- Seq(r.dx, r.dy, r.dz).zipWithIndex) q.ray.d(a).poke(u32(fbits(x)).U)
-          for ((x, a) <- Seq(r.ix, r.iy, r.iz).zipWithIndex) q.ray.inv(a).poke(u32(fbits(x)).U)
-          q.ray.tmin.poke(u32(fbits(tmin)).U)
+          def pokeRay(to: RayData): Unit = {
+            for ((x, a) <- Seq(r.ox, r.oy, r.oz).zipWithIndex) to.o(a).poke(u32(fbits(x)).U)
+            for ((x, a) <- Seq(r.dx, r.dy, r.dz).zipWithIndex) to.d(a).poke(u32(fbits(x)).U)
+            for ((x, a) <- Seq(r.ix, r.iy, r.iz).zipWithIndex) to.inv(a).poke(u32(fbits(x)).U)
+            to.tmin.poke(u32(fbits(tmin)).U)
+          }
+          q.ray.foreach(pokeRay)
+          for (w <- dut.io.rays) { w.valid.poke(true.B); w.bits.slot.poke(i.U); pokeRay(w.bits.ray); storeFree = false }
           dut.io.req(i).valid.poke(true.B)
           tuReq(i) = Some(Req(cref, tmax, r)); issued += 1
         }
@@ -286,6 +295,16 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     assert(s.boxHits > 0 && s.triHits > 0 && s.badNodes > 0 && s.badPrims > 0)
     assert(s.overtakes > 50, s"only ${s.overtakes} answers were placed ahead of an older one: the test does not reorder")
   }
+
+  // RAY_STORE=1: requests carry no ray; every request brings a new random ray, written into the store as it is
+  // presented, so a read of the wrong entry (or of a stale ray) gives another ray's results
+  for ((order, tus, seed) <- Seq((RespOrder.Tagged, 5, 8L), (RespOrder.Request, 3, 9L)))
+    test(s"RAY_STORE=1, RESP_ORDER=$order, TUs=$tus M=4: rays from the ray store, results equal the model (1500 requests, seed $seed)") {
+      val img = soupImage(seed, PlatformParams(tus = tus, m = 4, mppl = 4), fit = false)
+      val s = run(img, 256, 1500, seed, errPercent = 3, order = order, rayStore = true)
+      info(report(s))
+      assert(s.boxHits > 0 && s.triHits > 0 && s.badNodes > 0 && s.badPrims > 0)
+    }
 
   test("no memory errors: every result is clean, TUs=4 M=4 (1000 requests, seed 4)") {
     val img = soupImage(1L, PlatformParams(tus = 4, m = 4, mppl = 4), fit = false)

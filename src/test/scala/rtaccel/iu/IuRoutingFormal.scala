@@ -119,7 +119,7 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     port.valid := busy && !taken
     port.bits.tu := i.U
     port.bits.cref := cref.pad(32)
-    port.bits.ray := io.ray
+    port.bits.ray.foreach(_ := io.ray) // RAY_STORE=0 here
     port.bits.tmax := io.tmax
     when(port.fire) {
       taken := true.B

@@ -162,8 +162,8 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
             val q = dut.io.req.bits
             if (q.tu.peek().litValue != index) fail(s"request tagged TU ${q.tu.peek().litValue}")
             val want = Seq(r.ox, r.oy, r.oz, r.dx, r.dy, r.dz, r.ix, r.iy, r.iz, r.tmin).map(x => u32(fbits(x)))
-            val got = (0 until 3).map(k => q.ray.o(k).peek().litValue) ++ (0 until 3).map(k => q.ray.d(k).peek().litValue) ++
-              (0 until 3).map(k => q.ray.inv(k).peek().litValue) :+ q.ray.tmin.peek().litValue
+            val got = (0 until 3).map(k => q.ray.get.o(k).peek().litValue) ++ (0 until 3).map(k => q.ray.get.d(k).peek().litValue) ++
+              (0 until 3).map(k => q.ray.get.inv(k).peek().litValue) :+ q.ray.get.tmin.peek().litValue
             if (got != want) fail(s"request carries ray $got, want $want")
             val tmaxBits = q.tmax.peek().litValue.toInt
             if (tmaxBits != fbits(curTmax)) fail(f"request tmax 0x$tmaxBits%08x, want 0x${fbits(curTmax)}%08x (ray tmax or closest hit so far)")
