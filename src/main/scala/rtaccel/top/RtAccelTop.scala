@@ -114,7 +114,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   for ((iu, c) <- ius.zipWithIndex; w <- iu.io.rays) {
     val mine = tc.io.tuRay.slice(c * p.tusPerIu, (c + 1) * p.tusPerIu)
     val fires = mine.map(_.fire)
-    assert(PopCount(fires) <= 1.U, "the TC handed out two rays in one cycle")
+    val v = VecInit(fires).asUInt // at most one bit set (v & (v - 1) clears the lowest): no adder left half unused
+    assert((v & (v - 1.U)) === 0.U, "the TC handed out two rays in one cycle")
     w.valid := fires.reduce(_ || _)
     w.bits.slot := (if (mine.size == 1) 0.U else OHToUInt(fires))
     w.bits.ray := mine.head.bits.ray // the TC offers every TU the same ray
