@@ -123,6 +123,13 @@ object Simulate {
   }
 
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
+  /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
+    * build of its own instead of a stale one. The preset's name and the clock shape no circuit, so they are left out.
+    */
+  def paramsDigest(p: PlatformParams): String =
+    java.security.MessageDigest.getInstance("SHA-256").digest(p.copy(name = "", clockMhz = 1).toString.getBytes("UTF-8"))
+      .take(5).map(b => f"${b & 0xff}%02x").mkString
+
   def run(b: Cli.Built, rays: Rays, o: SimOptions): Outcome = {
     val p = b.params
     CachePath.validate(p)
@@ -159,7 +166,8 @@ object Simulate {
       (if (p.primPacked) s"-packed${p.mppl}" else "") + // the leaf row (MPPL records) is a constant of the MC
       (if (p.nodeQuantBits > 0) s"-node${Numerics.nodeFormatName(p.nodeQuantBits)}" else "") +
       s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +
-      (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "")
+      (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "") +
+      s"-p${paramsDigest(p)}"
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
     val layout = ImageFile.write(img, axi, work.resolve("image.hex"))

@@ -18,6 +18,20 @@ class SimulateSpec extends AnyFunSuite {
   }
   private def last(s: String) = ujson.read(s.trim.linesIterator.toSeq.last)
 
+  test("the build key's digest changes with every circuit-shaping parameter, not with the preset's name or the clock") {
+    import rtaccel.config.{CacheParams, CachePolicy, PlatformParams}
+    val p = PlatformParams(tus = 4)
+    val d = Simulate.paramsDigest(p)
+    assert(d.matches("[0-9a-f]{10}"), d)
+    assert(Simulate.paramsDigest(PlatformParams(tus = 4)) == d) // stable: the same parameters, the same build
+    assert(Simulate.paramsDigest(p.copy(name = "mine", clockMhz = 200)) == d)
+    val changed = Seq(p.copy(rayStore = true), p.copy(tus = 8), p.copy(hw = p.hw.copy(cacheHitQueue = 8)),
+      p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lru)), p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lrp)),
+      p.copy(boxFormat = rtaccel.fp.FpFormat(8, 7)), p.copy(triTest = rtaccel.config.TriTest.Watertight))
+    val ds = changed.map(Simulate.paramsDigest)
+    assert(!ds.contains(d) && ds.distinct.length == ds.length, ds)
+  }
+
   test("a run whose check fails (cycle limit reached) exits 3, keeps its outputs and names the failure") {
     val out = dir.resolve("timeout")
     val (code, stdout, err) = sim(out, "--max-cycles", "2000")
