@@ -112,6 +112,12 @@ object CostModel {
         throw new InputError(s"the cost model is calibrated on full nodes only (no NodeDecode); NODE_FORMAT=${rtaccel.config.Numerics.nodeFormatName(p.nodeQuantBits)} needs FIDELITY=yosys")
       if (p.primPacked)
         throw new InputError("the cost model is calibrated on slot64 primitives only (no LeafAssembler); PRIM_FORMAT=packed needs FIDELITY=yosys")
+      // calibrated on the paper's request path: the two streams' job FIFOs, tagged job tables and hit queues, and the
+      // ray store's smaller arbiter have no term (docs/platform.md measures the store: 14k LUTs fewer)
+      if (p.respByPath)
+        throw new InputError(s"the cost model is calibrated on in-order answers only (RESP_ORDER=request); RESP_ORDER=${p.respOrder} needs FIDELITY=yosys")
+      if (p.rayStore)
+        throw new InputError("the cost model is calibrated on requests that carry their rays; RAY_STORE=1 needs FIDELITY=yosys")
       val scale = familyScale.getOrElse(fam, throw new InputError(
         s"the cost model has no calibration for family '$fam' (calibrated: ${familyScale.keys.toSeq.sorted.mkString(", ")}); use FIDELITY=yosys"))
       units.map { u =>

@@ -126,8 +126,10 @@ class CostModelSpec extends AnyFunSuite {
     assert(c4 == 2 && o4.isEmpty && e4.contains("BOX_FORMAT=bf16 needs FIDELITY=yosys"), e4)
     val (c5, o5, e5) = run(Area.main0, Flags.area, "--config", "small", "--fidelity", "model", "--tri-format", "fp64", "--out", dir.resolve("d").toString)
     assert(c5 == 2 && o5.isEmpty && e5.contains("TRI_FORMAT=fp64 needs FIDELITY=yosys"), e5)
-    for ((flag, v, msg) <- Seq(("--node-format", "q8", "NODE_FORMAT=q8 needs FIDELITY=yosys"), ("--prim-format", "packed", "PRIM_FORMAT=packed needs FIDELITY=yosys"))) {
-      val (c, o, e) = run(Area.main0, Flags.area, "--config", "small", "--fidelity", "model", flag, v, "--out", dir.resolve(s"f-$v").toString)
+    for ((flag, v, msg) <- Seq(("--node-format", "q8", "NODE_FORMAT=q8 needs FIDELITY=yosys"), ("--prim-format", "packed", "PRIM_FORMAT=packed needs FIDELITY=yosys"),
+        ("--resp-order", "path", "RESP_ORDER=path needs FIDELITY=yosys"), ("--resp-order", "tagged", "RESP_ORDER=tagged needs FIDELITY=yosys"),
+        ("--ray-store", "1", "RAY_STORE=1 needs FIDELITY=yosys"))) {
+      val (c, o, e) = run(Area.main0, Flags.area, "--config", "small", "--fidelity", "model", flag, v, "--out", dir.resolve(s"f-${flag.drop(2)}-$v").toString)
       assert(c == 2 && o.isEmpty && e.contains(msg), e)
     }
   }
