@@ -8,7 +8,7 @@ import chiseltest.internal.CachingAnnotation
 import chiseltest.simulator.VerilatorBackendAnnotation
 import firrtl2.options.TargetDirAnnotation
 import rtaccel.bvh.MemoryImage
-import rtaccel.config.{HwLimits, PlatformParams}
+import rtaccel.config.PlatformParams
 import rtaccel.io.InputError
 import rtaccel.mc.AxiParams
 import rtaccel.cache.hw.CachePath
@@ -122,7 +122,6 @@ object Simulate {
       readErrorDisagree = got.count(i => rtl.readError(i) != (model.prim(i) == Hits.ReadError)))
   }
 
-  /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
     * build of its own instead of a stale one. The preset's name and the clock shape no circuit, so they are left out.
     */
@@ -130,6 +129,7 @@ object Simulate {
     java.security.MessageDigest.getInstance("SHA-256").digest(p.copy(name = "", clockMhz = 1).toString.getBytes("UTF-8"))
       .take(5).map(b => f"${b & 0xff}%02x").mkString
 
+  /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
   def run(b: Cli.Built, rays: Rays, o: SimOptions): Outcome = {
     val p = b.params
     CachePath.validate(p)
@@ -165,7 +165,7 @@ object Simulate {
       (if (p.respByPath) s"-r${p.respOrder}" else "") + (if (p.rayStore) "-raystore" else "") +
       (if (p.primPacked) s"-packed${p.mppl}" else "") + // the leaf row (MPPL records) is a constant of the MC
       (if (p.nodeQuantBits > 0) s"-node${Numerics.nodeFormatName(p.nodeQuantBits)}" else "") +
-      s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + (if (p.hw != HwLimits()) s"-hw${Integer.toHexString(p.hw.hashCode)}" else "") +
+      s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + // HwLimits: in the digest
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "") +
       s"-p${paramsDigest(p)}"
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
