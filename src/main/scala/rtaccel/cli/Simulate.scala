@@ -145,7 +145,7 @@ object Simulate {
     val model = new Traversal(img, faults).traceAll(rays, if (cached) rec else AccessSink.none, stats)
     val accessRows = rec.toArray
     // the RTL logs its access order only when a cache is present; it makes exactly the model's accesses
-    val logCap = if (cached) SimSetup.pow2(math.max(SimSetup.logWords, accessRows.length / 5)) else 0
+    val logCap = if (cached) SimSetup.capacity(accessRows.length / 5, SimSetup.minLogEntries) else 0
     val label = o.label
     val build = o.build.getOrElse(rtaccel.sim.VerilatorBuild.auto(rays.count))
     val den = 1000
@@ -153,7 +153,8 @@ object Simulate {
       bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
     // One folder per simulator build: everything that changes the circuit is in its name.
     val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
-    val rayCap = SimSetup.pow2(rays.count); val wordCap = SimSetup.pow2((imageBytes + axi.beatBytes - 1) / axi.beatBytes)
+    val rayCap = SimSetup.capacity(rays.count, SimSetup.minRays)
+    val wordCap = SimSetup.capacity((imageBytes + axi.beatBytes - 1) / axi.beatBytes, SimSetup.minImageBytes / axi.beatBytes)
     val r = p.refs
     val key = s"tus${p.tus}" + (if (p.ius > 1) s"-ius${p.ius}" else "") + (if (p.memChannels > 1) s"-ch${p.memChannels}.${p.hw.channelInterleaveBytes}" else "") + s"-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +

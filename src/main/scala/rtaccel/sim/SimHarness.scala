@@ -31,6 +31,17 @@ object SimSetup {
     */
   val channelSeedStep = 7919
   def pow2(n: Long): Int = { var c = 1L; while (c < n) c <<= 1; require(c <= (1 << 30), s"$n entries is too large to simulate"); c.toInt }
+  /** The smallest capacities `make simulate` builds (simulator memory only, no hardware's): every frame up to
+    * 128×96 + 5 bounces on every scene up to the paper's sizes (sponza, conference: image 7–40 MB) then lands
+    * in one class and shares one compiled simulator per platform, so `make paper` builds each circuit once
+    * instead of once per scene and frame size. The price is simulator memory: 64 MiB per DRAM channel, 2^17
+    * rays and hits, 8 MiB of access log per IU cluster, whatever the run needs.
+    */
+  val minRays: Int = 1 << 17
+  val minImageBytes: Long = 64L << 20
+  val minLogEntries: Int = 1 << 21
+  /** The capacity of a build that must hold `n` entries: a power of two, at least `floor`. */
+  def capacity(n: Long, floor: Long): Int = pow2(math.max(n, floor))
 }
 
 /** Simulation-only wrapper: the board top with the rays in a ROM (the host's ray stream), the memory image in a

@@ -29,7 +29,8 @@ class CachePathFormalSpec extends AnyFlatSpec with FormalChecks {
 
   val dm = configs.head._2
   val depth = configs.head._3
-  for (bug <- Seq(PathBug.Spurious, PathBug.Corrupt, PathBug.NoLast))
+  // a lost `last` takes z3 about 80 s to show at this depth (the other two a few seconds): make regress
+  for (bug <- Seq(PathBug.Spurious, PathBug.Corrupt) ++ (if (regress) Seq(PathBug.NoLast) else Nil))
     it should s"find a counterexample to a ${bug.name}" in refute(new CachePathFormal(dm, live, answerBound, bug), depth)
 
   // RESP_ORDER=tagged (hits under misses): two requesters, answers in any order; each request answered once, its

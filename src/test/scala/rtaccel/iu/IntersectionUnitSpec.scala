@@ -297,8 +297,9 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   }
 
   // RAY_STORE=1: requests carry no ray; every request brings a new random ray, written into the store as it is
-  // presented, so a read of the wrong entry (or of a stale ray) gives another ray's results
-  for ((order, tus, seed) <- Seq((RespOrder.Tagged, 5, 8L), (RespOrder.Request, 3, 9L)))
+  // presented, so a read of the wrong entry (or of a stale ray) gives another ray's results (make test: tagged, whose
+  // answers come back in any order, the harder case for the store; make regress adds request order)
+  for ((order, tus, seed) <- Seq((RespOrder.Tagged, 5, 8L)) ++ (if (regress) Seq((RespOrder.Request, 3, 9L)) else Nil))
     test(s"RAY_STORE=1, RESP_ORDER=$order, TUs=$tus M=4: rays from the ray store, results equal the model (1500 requests, seed $seed)") {
       val img = soupImage(seed, PlatformParams(tus = tus, m = 4, mppl = 4), fit = false)
       val s = run(img, 256, 1500, seed, errPercent = 3, order = order, rayStore = true)
@@ -306,7 +307,8 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
       assert(s.boxHits > 0 && s.triHits > 0 && s.badNodes > 0 && s.badPrims > 0)
     }
 
-  test("no memory errors: every result is clean, TUs=4 M=4 (1000 requests, seed 4)") {
+  // make regress: every other case mixes 97 % clean beats with the poisoned ones already
+  if (regress) test("no memory errors: every result is clean, TUs=4 M=4 (1000 requests, seed 4)") {
     val img = soupImage(1L, PlatformParams(tus = 4, m = 4, mppl = 4), fit = false)
     val s = run(img, 256, 1000, 4L, errPercent = 0)
     info(report(s))

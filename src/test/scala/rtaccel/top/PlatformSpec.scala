@@ -236,12 +236,13 @@ class PlatformSpec extends AnyFunSuite {
 
   // IUS clusters (docs/architecture.md): each cluster's caches see only its own TUs' accesses, so the counts equal
   // the model replaying each cluster's log through its own caches; both clusters must have worked.
-  // MEM_CHANNELS: each channel its own DRAM model (own jitter); make test runs IUS=2 over 2 channels at once
-  private val iusCases = Seq((2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
-    (if (!full) Nil else Seq((2, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
+  // MEM_CHANNELS: each channel its own DRAM model (own jitter). make test runs IUS=2 over 2 channels in its
+  // RESP_ORDER=path case below (one circuit for the three); make regress each here with request order.
+  private val iusCases = if (!full) Nil else Seq((2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
+      (2, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
       (1, 2, 4, CacheParams(), CacheParams(), 17, 0), (1, 4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 10),
       (2, 1, 4, CacheParams(), CacheParams(), 17, 0), (4, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 20),
-      (4, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0), (2, 1, 2, CacheParams(), CacheParams(), 0, 0)))
+      (4, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0), (2, 1, 2, CacheParams(), CacheParams(), 0, 0))
   for ((ius, ch, tus, node, prim, jitter, stall) <- iusCases)
     test(s"IUS=$ius clusters, MEM_CHANNELS=$ch at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts per cluster equal the model") {
       val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch).json
@@ -250,19 +251,20 @@ class PlatformSpec extends AnyFunSuite {
 
   // RESP_ORDER=path and tagged (docs/platform.md): node and leaf responses in two streams (tagged: each in any
   // order, hits under misses); bit-exact, and the caches' counts still equal the model replaying the RTL's own
-  // order. make test: IUS=2 with caches under jitter and backpressure for path, IUS=1 with both caches for tagged.
+  // order. make test: IUS=2 over MEM_CHANNELS=2 with caches under jitter and backpressure for path (the clusters and
+  // channels case of make test too), IUS=1 with both caches for tagged.
   private val (path, tagged) = (RespOrder.Path, RespOrder.Tagged)
-  private val pathCases = Seq((path, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
-    (tagged, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30)) ++
-    (if (!full) Nil else Seq((path, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
-      (path, 2, 4, CacheParams(), CacheParams(), 0, 0), (tagged, 1, 4, CacheParams(), CacheParams(), 17, 20),
-      (tagged, 2, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25),
-      (tagged, 1, 8, CacheParams(32, 1, CachePolicy.Hybrid), CacheParams(16, 4, CachePolicy.Plru), 0, 0)))
-  for ((order, ius, tus, node, prim, jitter, stall) <- pathCases)
-    test(s"RESP_ORDER=$order, IUS=$ius at $tus TUs (node ${node.entries}${if (node.entries > 0) " " + node.policy else ""}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts equal the model") {
-      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, order = order).json
+  private val pathCases = Seq((path, 2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
+    (tagged, 1, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30)) ++
+    (if (!full) Nil else Seq((path, 1, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
+      (path, 2, 1, 4, CacheParams(), CacheParams(), 0, 0), (tagged, 1, 1, 4, CacheParams(), CacheParams(), 17, 20),
+      (tagged, 2, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25),
+      (tagged, 1, 1, 8, CacheParams(32, 1, CachePolicy.Hybrid), CacheParams(16, 4, CachePolicy.Plru), 0, 0)))
+  for ((order, ius, ch, tus, node, prim, jitter, stall) <- pathCases)
+    test(s"RESP_ORDER=$order, IUS=$ius${if (ch > 1) s", MEM_CHANNELS=$ch" else ""} at $tus TUs (node ${node.entries}${if (node.entries > 0) " " + node.policy else ""}, prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, counts ${if (ch > 1) "per cluster " else ""}equal the model") {
+      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch, order = order).json
       assert(j("resp_order").str == order, ujson.write(j))
-      checkClusters(j, ius, 1, node, prim)
+      checkClusters(j, ius, ch, node, prim)
     }
 
   // RAY_STORE=1 (docs/platform.md, "Ray store"): the rays wait in each cluster's store instead of travelling with
