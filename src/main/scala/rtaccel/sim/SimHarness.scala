@@ -32,7 +32,7 @@ object SimSetup {
   val channelSeedStep = 7919
   def pow2(n: Long): Int = { var c = 1L; while (c < n) c <<= 1; require(c <= (1 << 30), s"$n entries is too large to simulate"); c.toInt }
   /** The smallest capacities `make simulate` builds (simulator memory only, no hardware's): every frame up to
-    * 128×96 + 5 bounces on every scene up to the paper's sizes (sponza, conference: image 7–40 MB) then lands
+    * 128×96 + 5 bounces on every scene up to the paper's sizes (conference's image, the larger, is 29 MB) then lands
     * in one class and shares one compiled simulator per platform, so `make paper` builds each circuit once
     * instead of once per scene and frame size. The price is simulator memory: 64 MiB per DRAM channel, 2^17
     * rays and hits, 8 MiB of access log per IU cluster, whatever the run needs.

@@ -74,12 +74,15 @@ class CachePathSpec extends McCases {
   }
 
   def cacheCase(what: String, node: CacheParams, prim: CacheParams, seed: Long, expectBypass: Boolean = false,
-                jitter: Int = 15, readyProb: Double = 0.6): Unit =
+                jitter: Int = 15, readyProb: Double = 0.6, tagged: Int = 0): Unit =
     runCase(s"serve image bytes and count like the model: $what", dataBits = 256, tris = 400, nReqs = 260,
       DramConfig(12, 4, 1, randomExtraLatency = jitter, seed = seed.toInt), reqProb = 0.8, readyProb = readyProb, seed = seed,
       refFormat = withLevels, pathFactory = CachePath.factory(node, prim, 4), respBufferBeats = 16, maxCycles = 200000,
       maxLevel = node.maxLevel, pick = skewed, annotations = Seq(VerilatorBackendAnnotation), // policy tables are slow in treadle
+      tagged = tagged,
       afterRun = (dut: McHarness, refs: Seq[Int], img: MemoryImage) => {
+        // tagged: hits answered under older misses, else the case does not test out-of-order answers
+        if (tagged > 0) assert(overtakes > 10, s"only $overtakes answers began ahead of an older request's")
         val m = modelCounts(img, node, prim, refs)
         for ((name, stats, model) <- Seq(("node", dut.io.counters.nodeCache, m.nodeCache), ("prim", dut.io.counters.primCache, m.primCache))) {
           val (h, mi, b) = (stats.hits.peek().litValue, stats.misses.peek().litValue, stats.bypasses.peek().litValue)
@@ -105,6 +108,12 @@ class CachePathSpec extends McCases {
   cacheCase("level policy, 2-way LRU, MAX_LEVEL 1", CacheParams(16, 2, CachePolicy.Lrp, maxLevel = 1), none, seed = 35, expectBypass = true)
   cacheCase("breadth-first static buffer of 16 nodes (preloaded)", CacheParams(16, 1, CachePolicy.Bf), none, seed = 36, expectBypass = true)
   cacheCase("hybrid: DM + LRP side cache, MAX_LEVEL 3", CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 3), CacheParams(8, 1, CachePolicy.Dm), seed = 37)
+  // RESP_ORDER=tagged (hits under misses): 4 requesters, each one request in flight, answers in any order on each
+  // port; every beat checked against the request its tag names, each answer back to back, counts on the accepted order
+  cacheCase("RESP_ORDER=tagged, 4 requesters: 2-way LRU node cache + direct-mapped primitive cache", CacheParams(32, 2, CachePolicy.Lru),
+    CacheParams(16, 1, CachePolicy.Dm), seed = 39, tagged = 4)
+  if (rtaccel.Regress.full) cacheCase("RESP_ORDER=tagged, 7 requesters: hybrid node cache (MAX_LEVEL 2) + 4-way PLRU primitive cache",
+    CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(32, 4, CachePolicy.Plru), seed = 40, tagged = 7)
   if (rtaccel.Regress.full) cacheCase("DM node + primitive cache, no DRAM jitter, host always ready", CacheParams(16, 1, CachePolicy.Dm), CacheParams(16, 1, CachePolicy.Dm),
     seed = 38, jitter = 0, readyProb = 1.0)
 }

@@ -34,9 +34,9 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
   val dram = Module(new DramModel(axi, words, hex, cfg))
   dram.io.axi <> mc.io.axi
   val io = IO(new Bundle {
-    val req = Flipped(chisel3.util.Decoupled(new FetchReq))
-    val resp = chisel3.util.Decoupled(new FetchBeat(axi.dataBits))
-    val primResp = if (p.respByPath) Some(chisel3.util.Decoupled(new FetchBeat(axi.dataBits))) else None
+    val req = Flipped(chisel3.util.Decoupled(new FetchReq(p.respTagBits)))
+    val resp = chisel3.util.Decoupled(new FetchBeat(axi.dataBits, p.respTagBits))
+    val primResp = if (p.respByPath) Some(chisel3.util.Decoupled(new FetchBeat(axi.dataBits, p.respTagBits))) else None
     val primBase = Input(UInt(axi.addrBits.W))
     val maxLevel = Input(UInt(4.W))
     val counters = Output(new McCounters)
@@ -85,8 +85,8 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
   import MemTestImages._
 
   /** Every fetchable ref of the image: the root (ref 0 = node 0) and every non-empty child. */
-  /** RESP_ORDER=path: node beats of the running case that left while an older leaf was still unanswered (set
-    * before afterRun, which may check it). */
+  /** RESP_ORDER=path: node beats of the running case that left while an older leaf was still unanswered;
+    * tagged: answers that began ahead of an older request's on their port (set before afterRun, which may check it). */
   var overtakes = 0
 
   def allRefs(img: MemoryImage): IndexedSeq[Int] =
@@ -98,11 +98,12 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               respBufferBeats: Int = 0, maxCycles: Int = 30000, maxLevel: Int = 15,
               pick: (Random, IndexedSeq[Int]) => Int = (r, pool) => pool(r.nextInt(pool.length)),
               afterRun: (McHarness, Seq[Int], MemoryImage) => Unit = (_, _, _) => (),
-              annotations: firrtl2.AnnotationSeq = Seq(), respByPath: Boolean = false): Unit =
+              annotations: firrtl2.AnnotationSeq = Seq(), respByPath: Boolean = false, tagged: Int = 0): Unit =
     it should name in {
       val axi = AxiParams(dataBits = dataBits)
       val img = image(seed, tris, refFormat)
-      val p = img.p.copy(respByPath = respByPath)
+      // tagged > 0: RESP_ORDER=tagged with that many requesters (the TUs), each with at most one request in flight
+      val p = if (tagged > 0) img.p.copy(tus = tagged, respByPath = true, respTagged = true) else img.p.copy(respByPath = respByPath)
       val codec = new RefCodec(p.refs)
       val hex = Files.createTempDirectory("mc").resolve("img.hex").toAbsolutePath
       val lay = ImageFile.write(img, axi, hex)
@@ -121,8 +122,12 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
       // RESP_ORDER=request: one stream of every beat in request order; path: node beats and leaf beats, each in
       // its own request order
       val (leafIx, nodeIx) = refs.indices.partition(j => codec.isPrim(refs(j)))
-      val streams = if (respByPath) Seq(beatsOf(nodeIx), beatsOf(leafIx)) else Seq(beatsOf(refs.indices))
+      val streams = if (p.respByPath) Seq(beatsOf(nodeIx), beatsOf(leafIx)) else Seq(beatsOf(refs.indices))
       val expected = streams.flatten.map(_._1)
+      // tagged: which request each requester has in flight, and per port the answer under way (tag, request, beat)
+      val inFlight = Array.fill(math.max(1, tagged))(-1)
+      val underWay = Array.fill(streams.length)(Option.empty[(Int, Int, Int)])
+      var tag = 0
       test(new McHarness(p, axi, lay.words, hex.toString, cfg, pathFactory, respBufferBeats)).withAnnotations(annotations) { dut =>
         dut.clock.setTimeout(0)
         dut.io.primBase.poke(lay.primBaseBytes.U)
@@ -135,13 +140,34 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
         var overtook = 0 // node beats that left while an older leaf was unanswered (RESP_ORDER=path)
         while (got.map(_.length).sum < expected.length) {
           assert(cyc < maxCycles, s"timeout after ${got.map(_.length).sum}/${expected.length} beats")
-          if (!presenting && next < refs.length && r.nextDouble() < reqProb) presenting = true
+          val free = inFlight.indices.filter(inFlight(_) < 0)
+          if (!presenting && next < refs.length && (tagged == 0 || free.nonEmpty) && r.nextDouble() < reqProb) {
+            presenting = true; if (tagged > 0) tag = free(r.nextInt(free.length))
+          }
           dut.io.req.valid.poke(presenting.B)
           if (presenting) dut.io.req.bits.childRef.poke((refs(next) & 0xffffffffL).U)
+          dut.io.req.bits.tag.foreach(_.poke(tag.U))
           for (((port, g), k) <- ports.zip(got).zipWithIndex) {
             val ready = r.nextDouble() < readyProb
             port.ready.poke(ready.B)
-            if (ready && port.valid.peek().litToBoolean) {
+            if (ready && port.valid.peek().litToBoolean && tagged > 0) {
+              // each beat belongs to the request in flight under its tag, beats of one answer back to back
+              val b = (port.bits.data.peek().litValue, port.bits.last.peek().litToBoolean)
+              val t = port.bits.tag.get.peek().litValue.toInt
+              val (t0, j, i) = underWay(k).getOrElse {
+                assert(t < tagged && inFlight(t) >= 0, s"port $k: a beat tagged $t, which has no request in flight (cycle $cyc)")
+                val j = inFlight(t)
+                assert(codec.isPrim(refs(j)) == (k == 1), s"port $k: request $j (tag $t) answered on the other kind's port")
+                if (inFlight.exists(o => o >= 0 && o < j && codec.isPrim(refs(o)) == (k == 1))) overtook += 1
+                (t, j, 0)
+              }
+              assert(t == t0, s"port $k: a beat tagged $t inside the answer to tag $t0 (request $j, cycle $cyc): not back to back")
+              val want = beatsOf(Seq(j))
+              assert(i < want.length, s"port $k: request $j (tag $t) got a beat after its last")
+              assert(b == want(i)._1, s"port $k: beat $i of request $j (tag $t, cycle $cyc) differs")
+              g += b
+              if (b._2) { done(j) = true; inFlight(t) = -1; underWay(k) = None } else underWay(k) = Some((t, j, i + 1))
+            } else if (ready && port.valid.peek().litToBoolean) {
               val b = (port.bits.data.peek().litValue, port.bits.last.peek().litToBoolean)
               val i = g.length
               assert(i < streams(k).length, s"stream $k: a beat after its last expected one (cycle $cyc)")
@@ -152,7 +178,7 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               if (k == 0 && respByPath && leafIx.exists(l => l < j && !done(l))) overtook += 1
             }
           }
-          if (presenting && dut.io.req.ready.peek().litToBoolean) { presenting = false; next += 1 }
+          if (presenting && dut.io.req.ready.peek().litToBoolean) { if (tagged > 0) inFlight(tag) = next; presenting = false; next += 1 }
           maxOutstanding = math.max(maxOutstanding, next - done.count(identity))
           dut.clock.step(); cyc += 1
         }
@@ -175,7 +201,8 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
         val overtaken = dut.io.overtaken.peek().litValue
         info(s"$overtaken beats arrived for the other path than the one awaited")
         if (pathFactory eq FetchPath.passThrough) assert(overtaken == 0)
-        if (respByPath) info(s"$overtook node beats left ahead of an older unanswered leaf")
+        if (tagged > 0) info(s"$overtook answers began ahead of an older request's on their port")
+        else if (respByPath) info(s"$overtook node beats left ahead of an older unanswered leaf")
         overtakes = overtook
         afterRun(dut, refs, img)
       }
