@@ -111,7 +111,7 @@ class CachePathSpec extends McCases {
   // RESP_ORDER=tagged (hits under misses): 4 requesters, each one request in flight, answers in any order on each
   // port; every beat checked against the request its tag names, each answer back to back, counts on the accepted order
   cacheCase("RESP_ORDER=tagged, 4 requesters: 2-way LRU node cache + direct-mapped primitive cache", CacheParams(32, 2, CachePolicy.Lru),
-    CacheParams(16, 1, CachePolicy.Dm), seed = 39, tagged = 4)
+    CacheParams(64, 1, CachePolicy.Dm), seed = 39, tagged = 4)
   if (rtaccel.Regress.full) cacheCase("RESP_ORDER=tagged, 7 requesters: hybrid node cache (MAX_LEVEL 2) + 4-way PLRU primitive cache",
     CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(32, 4, CachePolicy.Plru), seed = 40, tagged = 7)
   if (rtaccel.Regress.full) cacheCase("DM node + primitive cache, no DRAM jitter, host always ready", CacheParams(16, 1, CachePolicy.Dm), CacheParams(16, 1, CachePolicy.Dm),
