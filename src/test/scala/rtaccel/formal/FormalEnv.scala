@@ -79,44 +79,4 @@ class AbstractMem(addrBits: Int, beatsBits: Int, dataBits: Int, depth: Int, boun
     when(resp.fire) { beat := Mux(last, 0.U, beat + 1.U) }
     q.io.deq.ready := resp.fire && last
   }
-
-  /** RESP_ORDER=tagged: reads tagged by their requester (`tags` requesters, one read in flight each) and answered in
-    * any order: when a port is idle it starts the read the free `pick(k)` names if that one waits for it, else the
-    * lowest-tagged one that does (so no read starves: the liveness bound stays meaningful). A read's beats go back
-    * to back on the port of its kind (`ports(0)` nodes, `ports(1)` leaves), each with the read's tag; the two ports
-    * answer independently, port k with its own free stalls and data (`frees(k)`; the magic beat is the same).
-    */
-  def serveTagged(req: DecoupledIO[MemReq], tag: UInt, leaf: Bool, tags: Int, ports: Seq[DecoupledIO[FetchBeat]],
-                  pick: Seq[UInt], frees: Seq[MemFree]): Unit = {
-    class Slot extends Bundle {
-      val valid = Bool(); val started = Bool(); val leaf = Bool(); val addr = UInt(addrBits.W); val beats = UInt(beatsBits.W)
-    }
-    val slots = RegInit(VecInit(Seq.fill(tags)(0.U.asTypeOf(new Slot))))
-    val refuse = FormalEnv.stall(free.acceptStall, bounds.memStall)
-    req.ready := !slots(tag).valid && !refuse
-    when(req.fire) {
-      slots(tag).valid := true.B; slots(tag).started := false.B; slots(tag).leaf := leaf
-      slots(tag).addr := req.bits.addr; slots(tag).beats := req.bits.beats
-    }
-    for ((port, k) <- ports.zipWithIndex) {
-      val active = RegInit(false.B)
-      val cur = RegInit(0.U(math.max(1, log2Ceil(tags)).W))
-      val beat = RegInit(0.U(beatsBits.W))
-      val waits = VecInit(slots.map(s => s.valid && !s.started && s.leaf === (k == 1).B))
-      val choice = Mux(pick(k) < tags.U && waits(pick(k)), pick(k), PriorityEncoder(waits))
-      when(!active && waits.asUInt.orR) { active := true.B; cur := choice; slots(choice).started := true.B; beat := 0.U }
-      val head = slots(cur)
-      val last = beat === head.beats - 1.U
-      val magic = beatAddr(head.addr, beat) === magicBeat
-      port.valid := active && !FormalEnv.stall(frees(k).respStall, bounds.memStall)
-      port.bits.data := Mux(magic, magicData, frees(k).data)
-      port.bits.err := Mux(magic, magicErr, frees(k).err)
-      port.bits.last := last
-      port.bits.tag.foreach(_ := cur)
-      when(port.fire) {
-        beat := beat + 1.U
-        when(last) { active := false.B; slots(cur).valid := false.B }
-      }
-    }
-  }
 }

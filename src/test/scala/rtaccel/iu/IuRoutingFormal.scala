@@ -33,8 +33,6 @@ object IuRoutingFormal {
   val platform: PlatformParams = PlatformParams(tus = 2, m = 2, mppl = 2, divStages = 0,
     refs = RefFormat(nodeIdBits = 3, primIndexBits = 3, countBits = 1, levelBits = 0),
     hw = HwLimits(axiAddrBits = addrBits, iuOutstanding = 2))
-  /** RESP_ORDER=tagged: the node and leaf answers on two ports, each in any order, routed by the job tables */
-  val tagged: PlatformParams = platform.copy(respByPath = true, respTagged = true)
 }
 
 /** IntersectionUnit with two free TUs (each presents a request with a free child reference and ray, keeps it until
@@ -49,13 +47,10 @@ object IuRoutingFormal {
   *    memory's words of that node / primitive; a node or primitive read with the magic beat poisoned has err set;
   *  - with bounded memory stalls (bounds.live): a TU's request is answered within `answerBound` cycles of being
   *    presented.
-  * `tagged`: RESP_ORDER=tagged, the memory answering the two TUs' reads in any order (AbstractMem.serveTagged), node
-  * beats and leaf beats on their own ports; the order property is then dropped (answers may overtake), every other
-  * one stays.
   */
-class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.None, tagged: Boolean = false) extends Module {
+class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.None) extends Module {
   import IuRoutingFormal._
-  val p = if (tagged) IuRoutingFormal.tagged else platform
+  val p = platform
   private val f = p.refs
   private val tus = p.tus
   val io = IO(new Bundle {
@@ -64,8 +59,6 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     val ray = Input(new RayData)
     val tmax = Input(UInt(32.W))
     val mem = Input(new MemFree(beatBits))
-    val leafMem = Input(new MemFree(beatBits)) // tagged: the leaf port's stalls and data
-    val pick = Input(Vec(2, UInt(1.W)))        // tagged: which TU's read each port would answer next
     val bugFire = Input(Bool())
   })
   val dut = Module(new IntersectionUnit(p, beatBits, p.tus))
@@ -88,9 +81,7 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
   memReq.bits.addr := Mux(isLeaf(ref), slotAddr(ref, 0.U), nodeAddr(ref))
   memReq.bits.beats := Mux(isLeaf(ref), count(ref) * primBeats.U, nodeBeats.U)
   dut.io.mem.req.ready := memReq.ready
-  if (tagged) mem.serveTagged(memReq, dut.io.mem.req.bits.tag.get, isLeaf(ref), tus, Seq(dut.io.mem.resp, dut.io.mem.primResp.get),
-    io.pick, Seq(io.mem, io.leafMem))
-  else mem.serve(memReq, dut.io.mem.resp)
+  mem.serve(memReq, dut.io.mem.resp)
 
   // ---- the results as the monitor sees them (through the injected fault, if any)
   val box = WireDefault(dut.io.box)
@@ -108,13 +99,13 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     case IuBug.Starve => when(boxSeen) { box.valid := false.B }
   }
 
-  // ---- order of the requests taken, per kind (each TU has at most one outstanding: depth tus); not with tagged
-  // answers, which may overtake
-  val nodeOrder = if (tagged) None else Some(Module(new Queue(UInt(p.tuBits.W), tus)))
-  val leafOrder = if (tagged) None else Some(Module(new Queue(UInt(p.tuBits.W), tus)))
-  for (q <- nodeOrder ++ leafOrder) { q.io.enq.valid := false.B; q.io.enq.bits := DontCare }
-  nodeOrder.foreach(_.io.deq.ready := box.valid)
-  leafOrder.foreach(_.io.deq.ready := tri.valid && tri.bits.last)
+  // ---- order of the requests taken, per kind (each TU has at most one outstanding: depth tus)
+  val nodeOrder = Module(new Queue(UInt(p.tuBits.W), tus))
+  val leafOrder = Module(new Queue(UInt(p.tuBits.W), tus))
+  nodeOrder.io.enq.valid := false.B; nodeOrder.io.enq.bits := DontCare
+  leafOrder.io.enq.valid := false.B; leafOrder.io.enq.bits := DontCare
+  nodeOrder.io.deq.ready := box.valid
+  leafOrder.io.deq.ready := tri.valid && tri.bits.last
 
   // ---- the TUs
   for (i <- 0 until tus) {
@@ -132,13 +123,13 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     port.bits.tmax := io.tmax
     when(port.fire) {
       taken := true.B
-      for (q <- leafOrder) when(isLeaf(cref)) { q.io.enq.valid := true.B; q.io.enq.bits := i.U }
-      for (q <- nodeOrder) when(!isLeaf(cref)) { q.io.enq.valid := true.B; q.io.enq.bits := i.U }
+      when(isLeaf(cref)) { leafOrder.io.enq.valid := true.B; leafOrder.io.enq.bits := i.U }
+        .otherwise { nodeOrder.io.enq.valid := true.B; nodeOrder.io.enq.bits := i.U }
     }
     val waiting = busy && taken
     when(box.valid && box.bits.tu === i.U) {
       assert(waiting && !isLeaf(cref), "a box result for a TU not waiting for a node")
-      for (q <- nodeOrder) assert(q.io.deq.valid && q.io.deq.bits === i.U, "a box result out of request order")
+      assert(nodeOrder.io.deq.valid && nodeOrder.io.deq.bits === i.U, "a box result out of request order")
       for (j <- 0 until p.m) {
         val w = 7 * j + 6 // the child ref word of slot j
         val b = w * 32 / beatBits; val pos = w % (beatBits / 32)
@@ -153,7 +144,7 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     }
     when(tri.valid && tri.bits.tu === i.U) {
       assert(waiting && isLeaf(cref), "a triangle result for a TU not waiting for a leaf")
-      for (q <- leafOrder) assert(q.io.deq.valid && q.io.deq.bits === i.U, "a triangle result out of request order")
+      assert(leafOrder.io.deq.valid && leafOrder.io.deq.bits === i.U, "a triangle result out of request order")
       assert(tri.bits.last === (got === count(cref) - 1.U), "a leaf answered with other than its primitive count")
       val w = 9 // the triangle id word of a primitive slot
       val b = w * 32 / beatBits; val pos = w % (beatBits / 32)

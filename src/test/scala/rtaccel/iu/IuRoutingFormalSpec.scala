@@ -17,19 +17,9 @@ class IuRoutingFormalSpec extends AnyFlatSpec with FormalChecks {
     prove(new IuRoutingFormal(live, answerBound), depth)
   if (regress) for (bug <- Seq(IuBug.Spurious, IuBug.Retag, IuBug.Corrupt, IuBug.Duplicate))
     it should s"find a counterexample to a ${bug.name}" in refute(new IuRoutingFormal(live, answerBound, bug), depth)
-
-  // RESP_ORDER=tagged: the memory answers the two TUs' reads in any order on two ports; the job tables must route
-  // every beat to its TU (make regress only, as above)
-  if (regress) it should s"answer each TU request once, tagged, with the memory's data, within $answerBound cycles, in any order (RESP_ORDER=tagged)" in
-    prove(new IuRoutingFormal(live, answerBound, tagged = true), IuRoutingFormalSpec.taggedDepth, cvc4)
-  if (regress) for (bug <- Seq(IuBug.Spurious, IuBug.Retag, IuBug.Corrupt, IuBug.Duplicate))
-    it should s"find a counterexample to a ${bug.name} with tagged answers" in
-      refute(new IuRoutingFormal(live, answerBound, bug, tagged = true), IuRoutingFormalSpec.taggedDepth, cvc4)
 }
 
 object IuRoutingFormalSpec {
   val answerBound = 24
   val depth = 10
-  /** the tagged proofs' depth (CVC4, as the tagged cache path's) */
-  val taggedDepth = 10
 }
