@@ -150,9 +150,10 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
           for (((port, g), k) <- ports.zip(got).zipWithIndex) {
             val ready = r.nextDouble() < readyProb
             port.ready.poke(ready.B)
-            if (ready && port.valid.peek().litToBoolean && tagged > 0) {
+            val fired = ready && port.valid.peek().litToBoolean
+            lazy val b = (port.bits.data.peek().litValue, port.bits.last.peek().litToBoolean)
+            if (fired && tagged > 0) {
               // each beat belongs to the request in flight under its tag, beats of one answer back to back
-              val b = (port.bits.data.peek().litValue, port.bits.last.peek().litToBoolean)
               val t = port.bits.tag.get.peek().litValue.toInt
               val (t0, j, i) = underWay(k).getOrElse {
                 assert(t < tagged && inFlight(t) >= 0, s"port $k: a beat tagged $t, which has no request in flight (cycle $cyc)")
@@ -167,8 +168,7 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               assert(b == want(i)._1, s"port $k: beat $i of request $j (tag $t, cycle $cyc) differs")
               g += b
               if (b._2) { done(j) = true; inFlight(t) = -1; underWay(k) = None } else underWay(k) = Some((t, j, i + 1))
-            } else if (ready && port.valid.peek().litToBoolean) {
-              val b = (port.bits.data.peek().litValue, port.bits.last.peek().litToBoolean)
+            } else if (fired) {
               val i = g.length
               assert(i < streams(k).length, s"stream $k: a beat after its last expected one (cycle $cyc)")
               val (want, j) = streams(k)(i)
