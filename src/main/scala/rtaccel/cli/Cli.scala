@@ -53,6 +53,11 @@ object Cli {
         case "1" => true
         case v => throw new InputError(s"RAY_STORE=$v: use 1 (rays kept in each IU's ray store, requests carry the TU's index) or 0 (every request carries its ray, the paper's)")
       }.getOrElse(base.rayStore),
+      tagForward = a.opt("tag-forward").map {
+        case "0" => false
+        case "1" => true
+        case v => throw new InputError(s"TAG_FORWARD=$v: use 1 (cache tags take one lookup per cycle, forwarding the set just written) or 0 (one lookup per two cycles, the paper's)")
+      }.getOrElse(base.tagForward),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),

@@ -123,7 +123,11 @@ final case class PlatformParams(
   respTagged: Boolean = false,
   // RAY_STORE=1: each IU keeps its TUs' rays in a ray store (one entry per TU, written by the TC as it hands a ray
   // out); a request carries the TU's index, the reference and tmax, not the ray (docs/platform.md, "Ray store")
-  rayStore: Boolean = false
+  rayStore: Boolean = false,
+  // TAG_FORWARD=1: every cache path's tag pipeline accepts one lookup per cycle, the set a lookup writes forwarded to
+  // the next lookup's decision (read after write); 0: one lookup per two cycles (read, then decide and write), as
+  // the paper's pipeline (docs/caches.md, "One lookup per cycle")
+  tagForward: Boolean = false
 ) {
   require(!respTagged || respByPath, "RESP_ORDER=tagged answers on the two path streams; set respByPath with respTagged")
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),

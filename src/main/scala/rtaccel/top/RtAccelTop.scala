@@ -50,7 +50,7 @@ object RtAccelTop {
         "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
       Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
         "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L), "RESP_TAGGED" -> (if (p.respTagged) 1L else 0L),
-        "RAY_STORE" -> (if (p.rayStore) 1L else 0L)))
+        "RAY_STORE" -> (if (p.rayStore) 1L else 0L), "TAG_FORWARD" -> (if (p.tagForward) 1L else 0L)))
   }
 }
 

@@ -19,6 +19,9 @@ object PathBug {
   case object NoLast extends PathBug("lost last")
   /** once a request has been answered, output is held back for good: never answered */
   case object Starve extends PathBug("starved output")
+  /** inside the design: TAG_FORWARD=1 takes a lookup per cycle but reads the set as the RAM has it, missing the write
+    * of the decision before (a hit on the line that decision just evicted reads the other line's data) */
+  case object NoForward extends PathBug("one lookup per cycle without forwarding")
 }
 
 /** The small configuration the cache-path proofs run on: lines of two 32-bit beats (8-byte stride: the data
@@ -54,8 +57,8 @@ object CachePathFormal {
   * CachePath's own assertions are checked too.
   */
 class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: PathBug = PathBug.None,
-                      lineBits: Int = 4, tagged: Boolean = false) extends Module {
-  val p = CachePathFormal.platform(c, tagged)
+                      lineBits: Int = 4, tagged: Boolean = false, forward: Boolean = false) extends Module {
+  val p = CachePathFormal.platform(c, tagged).copy(tagForward = forward)
   val g = McGeometry(p, CachePathFormal.axi)
   val cg = CacheGeometry(c, 1, CachePathFormal.lineBeats, CachePathFormal.lineBeats * g.axi.beatBytes)
   val io = IO(new Bundle {
@@ -68,7 +71,8 @@ class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: 
     val mem = Input(new MemFree(g.axi.dataBits))
     val bugFire = Input(Bool()) // when the injected fault strikes (unused without one)
   })
-  val dut = Module(new CachePath(g, cg))
+  // PathBug.NoForward: TAG_FORWARD's one lookup per cycle without the forwarding of the set just written
+  val dut = Module(new CachePath(g, cg, forwardWrites = bug != PathBug.NoForward))
   // tagged: a requester with a request in flight asks for nothing more (set by the monitor below)
   val busyTag = WireDefault(false.B)
   dut.io.in.valid := io.reqValid && !busyTag
@@ -92,7 +96,7 @@ class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: 
   dut.io.out.ready := out.ready
   val answeredOnce = RegInit(false.B)
   bug match {
-    case PathBug.None =>
+    case PathBug.None | PathBug.NoForward => // NoForward: inside the design
     case PathBug.Spurious => out.valid := dut.io.out.valid || io.bugFire
     case PathBug.Corrupt => when(io.bugFire) { out.bits.data := dut.io.out.bits.data ^ 1.U }
     case PathBug.NoLast => when(io.bugFire) { out.bits.last := false.B }

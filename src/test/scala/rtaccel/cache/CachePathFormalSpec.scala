@@ -33,6 +33,17 @@ class CachePathFormalSpec extends AnyFlatSpec with FormalChecks {
   for (bug <- Seq(PathBug.Spurious, PathBug.Corrupt) ++ (if (regress) Seq(PathBug.NoLast) else Nil))
     it should s"find a counterexample to a ${bug.name}" in refute(new CachePathFormal(dm, live, answerBound, bug), depth)
 
+  // TAG_FORWARD=1 (one lookup per cycle, the set just written forwarded to the next decision): the same properties,
+  // and the mutant on read-first tag RAMs (a lookup that sees the set before the decision just taken) must fail them.
+  // Depth 14 is the shortest at which that mutant fails (a line filled, evicted by the next lookup and asked for by
+  // the one after: a hit on the other line's data, out at cycle 14), so the proof reaches the hazard; its
+  // refutation takes z3 about 2 minutes: make regress
+  val fwdDepth = CachePathFormalSpec.forwardDepth
+  it should s"answer each request once, in order, with the memory's data, within $answerBound cycles, one lookup per cycle (TAG_FORWARD=1): direct-mapped, 4 sets" in
+    prove(new CachePathFormal(dm, live, answerBound, forward = true), fwdDepth)
+  if (regress) it should "find a counterexample to one lookup per cycle without forwarding (read-first tag RAM)" in
+    refute(new CachePathFormal(dm, live, answerBound, PathBug.NoForward, forward = true), fwdDepth)
+
   // RESP_ORDER=tagged (hits under misses): two requesters, answers in any order; each request answered once, its
   // beats back to back, with the memory's data, within answerBound cycles (CachePathFormal, tagged)
   val taggedConfigs = Seq(("direct-mapped, 4 sets", dm, CachePathFormalSpec.taggedDepth, CachePathFormalSpec.taggedDepth),
@@ -51,6 +62,8 @@ class CachePathFormalSpec extends AnyFlatSpec with FormalChecks {
 object CachePathFormalSpec {
   /** cycles from acceptance to the last beat of the answer the proofs promise (stalls of at most one cycle) */
   val answerBound = 16
+  /** the TAG_FORWARD=1 proof's depth (make test and make regress) */
+  val forwardDepth = 14
   /** the tagged proofs' depth in make test */
   val taggedDepth = 8
 }

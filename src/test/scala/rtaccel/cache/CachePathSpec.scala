@@ -74,12 +74,12 @@ class CachePathSpec extends McCases {
   }
 
   def cacheCase(what: String, node: CacheParams, prim: CacheParams, seed: Long, expectBypass: Boolean = false,
-                jitter: Int = 15, readyProb: Double = 0.6, tagged: Int = 0): Unit =
+                jitter: Int = 15, readyProb: Double = 0.6, tagged: Int = 0, forward: Boolean = false): Unit =
     runCase(s"serve image bytes and count like the model: $what", dataBits = 256, tris = 400, nReqs = 260,
       DramConfig(12, 4, 1, randomExtraLatency = jitter, seed = seed.toInt), reqProb = 0.8, readyProb = readyProb, seed = seed,
       refFormat = withLevels, pathFactory = CachePath.factory(node, prim, 4), respBufferBeats = 16, maxCycles = 200000,
       maxLevel = node.maxLevel, pick = skewed, annotations = Seq(VerilatorBackendAnnotation), // policy tables are slow in treadle
-      tagged = tagged,
+      tagged = tagged, tagForward = forward,
       afterRun = (dut: McHarness, refs: Seq[Int], img: MemoryImage) => {
         // tagged: hits answered under older misses, else the case does not test out-of-order answers
         if (tagged > 0) assert(overtakes > 10, s"only $overtakes answers began ahead of an older request's")
@@ -114,6 +114,14 @@ class CachePathSpec extends McCases {
     CacheParams(64, 1, CachePolicy.Dm), seed = 39, tagged = 4)
   if (rtaccel.Regress.full) cacheCase("RESP_ORDER=tagged, 7 requesters: hybrid node cache (MAX_LEVEL 2) + 4-way PLRU primitive cache",
     CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(32, 4, CachePolicy.Plru), seed = 40, tagged = 7)
+  // TAG_FORWARD=1 (one lookup per cycle, read-after-write through the write-first tag RAMs): the counts still equal
+  // the model's on the accepted order; make test tagged on both arrays of the hybrid, make regress in order too
+  if (rtaccel.Regress.full) cacheCase("TAG_FORWARD=1: 2-way LRU node cache + direct-mapped primitive cache", CacheParams(16, 2, CachePolicy.Lru),
+    CacheParams(16, 1, CachePolicy.Dm), seed = 41, forward = true)
+  cacheCase("TAG_FORWARD=1, RESP_ORDER=tagged, 4 requesters: hybrid node cache (MAX_LEVEL 3) + 2-way LRU primitive cache",
+    CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), seed = 42, tagged = 4, forward = true)
+  if (rtaccel.Regress.full) cacheCase("TAG_FORWARD=1: level policy, 2-way LRU (MAX_LEVEL 1) + 4-way PLRU primitive cache, host always ready",
+    CacheParams(16, 2, CachePolicy.Lrp, maxLevel = 1), CacheParams(32, 4, CachePolicy.Plru), seed = 43, expectBypass = true, readyProb = 1.0, forward = true)
   if (rtaccel.Regress.full) cacheCase("DM node + primitive cache, no DRAM jitter, host always ready", CacheParams(16, 1, CachePolicy.Dm), CacheParams(16, 1, CachePolicy.Dm),
     seed = 38, jitter = 0, readyProb = 1.0)
 }

@@ -98,12 +98,14 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               respBufferBeats: Int = 0, maxCycles: Int = 30000, maxLevel: Int = 15,
               pick: (Random, IndexedSeq[Int]) => Int = (r, pool) => pool(r.nextInt(pool.length)),
               afterRun: (McHarness, Seq[Int], MemoryImage) => Unit = (_, _, _) => (),
-              annotations: firrtl2.AnnotationSeq = Seq(), respByPath: Boolean = false, tagged: Int = 0): Unit =
+              annotations: firrtl2.AnnotationSeq = Seq(), respByPath: Boolean = false, tagged: Int = 0,
+              tagForward: Boolean = false): Unit =
     it should name in {
       val axi = AxiParams(dataBits = dataBits)
       val img = image(seed, tris, refFormat)
       // tagged > 0: RESP_ORDER=tagged with that many requesters (the TUs), each with at most one request in flight
-      val p = if (tagged > 0) img.p.copy(tus = tagged, respByPath = true, respTagged = true) else img.p.copy(respByPath = respByPath)
+      val p = (if (tagged > 0) img.p.copy(tus = tagged, respByPath = true, respTagged = true) else img.p.copy(respByPath = respByPath))
+        .copy(tagForward = tagForward)
       val codec = new RefCodec(p.refs)
       val hex = Files.createTempDirectory("mc").resolve("img.hex").toAbsolutePath
       val lay = ImageFile.write(img, axi, hex)

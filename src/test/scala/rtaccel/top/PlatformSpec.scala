@@ -39,12 +39,12 @@ class PlatformSpec extends AnyFunSuite {
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
                      packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1,
-                     order: String = RespOrder.Request, rayStore: Boolean = false) = {
+                     order: String = RespOrder.Request, rayStore: Boolean = false, forward: Boolean = false) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
       shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels,
-      respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore)
+      respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec"))
@@ -269,17 +269,19 @@ class PlatformSpec extends AnyFunSuite {
 
   // RAY_STORE=1 (docs/platform.md, "Ray store"): the rays wait in each cluster's store instead of travelling with
   // every request; nothing else changes, so the run is bit-exact and (make regress) takes the very same cycles as
-  // without the store. make test: two clusters (the TC's write goes to the right cluster's store), tagged, caches.
-  private val storeCases = Seq((tagged, 2, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25)) ++
-    (if (!full) Nil else Seq((RespOrder.Request, 1, 4, CacheParams(), CacheParams(), 17, 20)))
-  for ((order, ius, tus, node, prim, jitter, stall) <- storeCases)
-    test(s"RAY_STORE=1, RESP_ORDER=$order, IUS=$ius at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): " +
+  // without the store. make test: two clusters (the TC's write goes to the right cluster's store), tagged, caches,
+  // and TAG_FORWARD=1 in the same circuit (one lookup per cycle: docs/caches.md); make regress the store alone too.
+  private val storeCases = Seq((tagged, 2, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true)) ++
+    (if (!full) Nil else Seq((RespOrder.Request, 1, 4, CacheParams(), CacheParams(), 17, 20, false),
+      (tagged, 2, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25, false)))
+  for ((order, ius, tus, node, prim, jitter, stall, fwd) <- storeCases)
+    test(s"RAY_STORE=1, RESP_ORDER=$order, IUS=$ius${if (fwd) ", TAG_FORWARD=1" else ""} at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): " +
         s"bit-exact, counts equal the model${if (full) ", the same cycles as without the store" else ""}") {
-      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, order = order, rayStore = true).json
-      assert(j("ray_store").bool && j("resp_order").str == order, ujson.write(j))
+      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, order = order, rayStore = true, forward = fwd).json
+      assert(j("ray_store").bool && j("resp_order").str == order && j("tag_forward").bool == fwd, ujson.write(j))
       checkClusters(j, ius, 1, node, prim)
       if (full) {
-        val without = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, order = order).json
+        val without = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, order = order, forward = fwd).json
         assert(without("cycles").num == j("cycles").num, s"RAY_STORE=1 took ${j("cycles").num} cycles, without the store ${without("cycles").num}")
       }
     }

@@ -17,7 +17,8 @@ class VerilogLintSpec extends AnyFunSuite {
   // leaf-row cache line, the short stack); make regress adds M=8, the breadth-first buffer and each option on its own
   private val cases = Seq(("paper2017", 4, 32, ""),
       ("paper2017", 4, 8, "--node-cache 8192 --prim-cache 1024 --prim-ways 2"),
-      ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru"),
+      // (with one lookup per cycle: write-first tag RAMs in both of the hybrid's arrays and the PLRU's)
+      ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru --tag-forward 1"),
       ("small", 4, 2, "--box-format bf16 --tri-test watertight --node-format q8 --node-cache 64 --prim-format packed --prim-cache 64 --prim-ways 2 --short-stack 4"),
       ("small", 4, 4, "--ius 4 --mem-channels 2 --node-cache 64 --prim-cache 64 --prim-ways 2"), // IU clusters of one TU each over 2 channels
       // two response streams, with the packed leaves' LeafAssembler on the leaf stream

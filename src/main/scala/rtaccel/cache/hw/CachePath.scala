@@ -26,7 +26,8 @@ final case class CacheGeometry(c: CacheParams, entriesPerLine: Int, lineBeats: I
   * is served, never replaced) and hybrid (direct-mapped LRP array + a small LRU/LRP side array).
   *
   * Tags run ahead of data: the tag arrays are looked up and updated in request order exactly as the trace model
-  * does (one request every two cycles: read the set, decide and write), so hit and miss counts equal the model's
+  * does (one request every two cycles: read the set, decide and write; TAG_FORWARD=1: one per cycle, the next
+  * request's read overlapping the decision, whose write the write-first tag RAM forwards), so hit and miss counts equal the model's
   * on the same order. Each lookup leaves a ticket (hit, fill, data line) in an in-order queue; misses send their
   * DRAM read at once. The data stage serves tickets strictly in order: a miss passes its DRAM beats to the output
   * and, if it allocated, writes them into the data RAM; a hit reads its line from the data RAM. Because data is
@@ -46,7 +47,9 @@ final case class CacheGeometry(c: CacheParams, entriesPerLine: Int, lineBeats: I
   * The answers leave through two output queues (clean hits, tickets), merged a whole answer at a time and
   * alternately when both wait, so neither starves the other.
   */
-class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g0) {
+class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = true) extends FetchPathModule(g0) {
+  // forwardWrites = false with TAG_FORWARD=1 only in the formal checks: one lookup per cycle on read-first tag RAMs
+  // (no forwarding: a lookup sees the set before the decision just taken), the mutant their proofs must refute
   private val hw = g0.p.hw
   private val tickets = hw.cacheTickets
   private val c = cg.c
@@ -79,9 +82,6 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
   val s1 = Reg(g.pathReq)
   val s1Valid = RegInit(false.B)
   val ready = WireDefault(true.B) // false while the arrays are cleared or the static buffer is preloaded
-  io.in.ready := !s1Valid && ready
-  when(io.in.fire) { s1 := io.in.bits; s1Valid := true.B }
-  val lookLine = Mux(s1Valid, s1.line, io.in.bits.line)
 
   val hit = Wire(Bool()); val fill = Wire(Bool()); val dataLine = Wire(UInt(math.max(1, lineBits).W))
   // RESP_ORDER=tagged: a hit is clean when no held ticket still fills its data line; it then waits in the hit
@@ -90,6 +90,14 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
   val clean = ticketScan.fold(false.B)(t => hit && !t.io.held.map(e => e.valid && e.bits.fill && e.bits.line === dataLine).reduce(_ || _))
   val s1Fire = s1Valid && Mux(clean, hitQ.fold(false.B)(_.io.enq.ready), ticketQ.enq.ready && (hit || missQ.io.enq.ready))
   when(s1Fire) { s1Valid := false.B }
+  // TAG_FORWARD=1: a new request enters stage 1 in the cycle the one there decides, when every queue that
+  // decision may enter has room (so it surely leaves; judged without the decision, which keeps the tag RAM's
+  // read data out of io.in.ready and the read address); its read gets the set that decision writes from the tag
+  // RAMs' write-first port (TagArray)
+  val advance = if (g0.p.tagForward) ticketQ.enq.ready && missQ.io.enq.ready && hitQ.fold(true.B)(_.io.enq.ready) else false.B
+  io.in.ready := (!s1Valid || advance) && ready
+  when(io.in.fire) { s1 := io.in.bits; s1Valid := true.B }
+  val lookLine = Mux(s1Valid && !advance, s1.line, io.in.bits.line)
 
   if (isBf) {
     // static buffer: lines 0..lines-1 hold nodes 0..lines-1 (the highest, breadth-first ids)
@@ -97,9 +105,10 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry) extends FetchPathModule(g
     fill := false.B
     dataLine := s1.line(math.max(1, lineBits) - 1, 0)
   } else {
+    val tagRuw = if (!g0.p.tagForward) SyncReadMem.Undefined else if (forwardWrites) SyncReadMem.WriteFirst else SyncReadMem.ReadFirst
     val mainPol = Policies.of(if (isHybrid) CachePolicy.Dm else c.policy, c.ways)
-    val main = new TagArray(cg.lines / c.ways, mainPol, lrp = c.policy.levelAware, hw.levelCodeBits)
-    val arrays = Seq(main) ++ (if (isHybrid) Seq(new TagArray(cg.sideLines / cg.sideWays, Policies.of(CachePolicy.Lru, cg.sideWays), lrp = true, hw.levelCodeBits)) else Nil)
+    val main = new TagArray(cg.lines / c.ways, mainPol, lrp = c.policy.levelAware, hw.levelCodeBits, tagRuw)
+    val arrays = Seq(main) ++ (if (isHybrid) Seq(new TagArray(cg.sideLines / cg.sideWays, Policies.of(CachePolicy.Lru, cg.sideWays), lrp = true, hw.levelCodeBits, tagRuw)) else Nil)
     val entries = arrays.map(_.read(lookLine))
     val ds = arrays.zip(entries).map { case (a, e) => a.decide(e, s1.line, s1.level, io.maxLevel) }
     // data line of (set, way): set * ways + way, after `base` lines of the arrays before this one

@@ -28,19 +28,25 @@ final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: Set
   * LevelPolicy.allocate(victim level, incoming level, MAX_LEVEL); a refused fill changes nothing.
   * Protocol: `read(line)` in one cycle, the `Decision` on the next (the data stays valid while the same set
   * is read again each cycle), `write` when the decision is taken.
+  * `ruw`: what a read returns when it starts in the cycle its set is written. Undefined (the default) while a read
+  * never overlaps a used write, as with one lookup per two cycles; WriteFirst for TAG_FORWARD=1, where the next
+  * lookup's read starts in the cycle the decision before writes: the RAM's write-first port (a block RAM in
+  * WRITE_FIRST mode) hands it the set just written, the read-after-write forwarding. (ReadFirst only in the formal
+  * checks: the stale set, the mutant they must refute.)
   */
-class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBits: Int) {
+class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBits: Int,
+               ruw: SyncReadMem.ReadUnderWrite = SyncReadMem.Undefined) {
   PolicyTables.check(pol)
   val ways: Int = pol.ways
   val setBits: Int = log2Ceil(sets)
   val tagBits: Int = 32 - setBits
   private def entryType = new SetEntry(ways, tagBits, pol.stateBits, levelBits)
-  private val mem = SyncReadMem(sets, entryType)
+  private val mem = SyncReadMem(sets, entryType, ruw)
 
   def setOf(line: UInt): UInt = if (setBits == 0) 0.U(1.W) else line(setBits - 1, 0)
   def tagOf(line: UInt): UInt = line(31, setBits)
 
-  /** Starts a read of `line`'s set; the result is `entry` one cycle later. */
+  /** Starts a read of `line`'s set; the result is the entry one cycle later. */
   def read(line: UInt): SetEntry = mem.read(setOf(line), true.B)
 
   /** The empty set of reset, written by the init sweep. */
