@@ -117,7 +117,7 @@ class CachePathSpec extends McCases {
   // TAG_FORWARD=1 (one lookup per cycle, read-after-write through the write-first tag RAMs): the counts still equal
   // the model's on the accepted order; make test tagged on both arrays of the hybrid, make regress in order too
   if (rtaccel.Regress.full) cacheCase("TAG_FORWARD=1: 2-way LRU node cache + direct-mapped primitive cache", CacheParams(16, 2, CachePolicy.Lru),
-    CacheParams(16, 1, CachePolicy.Dm), seed = 41, forward = true)
+    CacheParams(64, 1, CachePolicy.Dm), seed = 41, forward = true)
   cacheCase("TAG_FORWARD=1, RESP_ORDER=tagged, 4 requesters: hybrid node cache (MAX_LEVEL 3) + 2-way LRU primitive cache",
     CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), seed = 42, tagged = 4, forward = true)
   if (rtaccel.Regress.full) cacheCase("TAG_FORWARD=1: level policy, 2-way LRU (MAX_LEVEL 1) + 4-way PLRU primitive cache, host always ready",
