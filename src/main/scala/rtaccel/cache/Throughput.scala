@@ -136,11 +136,17 @@ object Throughput {
       if (p.respTagged) InOrder(0.0, misses / n, 0.0, lat)
       else InOrder(hits / n, misses / n, if (hits > 0) over / accesses + hb / beatBytes / hits else 0.0, lat)
     val (nodeAcc, leafAcc) = (s.nodeAccesses.toDouble, s.leafAccesses.toDouble)
+    // a cached path's tags take one lookup per two cycles (TAG_FORWARD=1: per cycle), in series with its response
+    // port: a path serves at the slower of its beats and its lookups, which are the lookups only for one-beat lines
+    // (docs/caches.md, "One lookup per cycle"; no term where every line is two or more beats)
+    val tagCycles = if (p.tagForward) 1.0 else 2.0
+    val nodeTags = s.nodeCache.fold(0.0)(_ => tagCycles * s.nodeAccesses / n)
+    val primTags = s.primCache.fold(0.0)(_ => tagCycles * s.leafAccesses / n)
     // RESP_ORDER=request: one stream over both paths and one response port; path: a stream and a port per path
     val (ports, streams) =
-      if (p.respByPath) (Seq(nodeBeats, primBeats),
+      if (p.respByPath) (Seq(math.max(nodeBeats, nodeTags), math.max(primBeats, primTags)),
         Seq(stream(nodeAcc, nodeAcc - nodeMisses, nodeMisses, nodeOverhead, nodeHitBytes), stream(leafAcc, leafAcc - leafMisses, leafMisses, primOverhead, primHitBytes)))
-      else { val acc = nodeAcc + leafAcc; (Seq(beats), Seq(stream(acc, acc - nodeMisses - leafMisses, nodeMisses + leafMisses, overhead, hitBytes))) }
+      else { val acc = nodeAcc + leafAcc; (Seq(Seq(beats, nodeTags, primTags).max), Seq(stream(acc, acc - nodeMisses - leafMisses, nodeMisses + leafMisses, overhead, hitBytes))) }
     // IUS clusters: each is the network above with TUS / IUS TUs, its own response port and a 1/IUS share of the
     // DRAM (the clusters are alike on average); the platform does IUS times one cluster's rays
     val k = p.ius

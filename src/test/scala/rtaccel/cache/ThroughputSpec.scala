@@ -105,6 +105,27 @@ class ThroughputSpec extends AnyFunSuite {
     }
   }
 
+  test("cache tags: one lookup per two cycles bounds a path of one-beat lines, TAG_FORWARD=1 lifts it; longer lines are unchanged") {
+    // every node hits a one-beat line after the first ray (32 B nodes on 32 B beats): many TUs approach the path's
+    // bound, 1 / (2 lookups x node accesses per ray) with two-cycle tags, 1 / (1 beat x accesses) with one
+    val p4 = Presets.paper2017.copy(respByPath = true, respTagged = true)
+    val p = p4.copy(m = 2, nodeQuantBits = 6) // M=2 q6: 32 B nodes
+    assert(p.nodeAccessBytes == 32 && p4.nodeAccessBytes == 128)
+    def sink(nodeBytes: Int) = {
+      val s = new CacheSink(Some(new CacheModel(CacheParams(64, 1, CachePolicy.Dm), LevelPolicy.paper)), None, nodeBytes, c => c * 64L)
+      for (r <- 0 until 200) { for (k <- 0 until 10) s.node(r, k, k % 4); s.leaf(r, r % 5, 1, 2) }
+      s.counts
+    }
+    val (slow, fast) = (Throughput.predict(p, sink(32), rays = 200, tus = 64), Throughput.predict(p.copy(tagForward = true), sink(32), rays = 200, tus = 64))
+    assert(slow.raysPerCycle <= (1 + 1e-12) / (2.0 * 10), s"two-cycle tags: $slow")
+    assert(slow.raysPerCycle > 0.9 / (2.0 * 10), s"64 TUs should come near the tag bound: $slow")
+    // one-cycle tags: the next resource binds (here the DRAM, 16.4 cycles per ray of leaf misses)
+    val next = math.max(10.0, fast.dramCycles)
+    assert(fast.raysPerCycle <= (1 + 1e-12) / next && fast.raysPerCycle > 0.95 / next && fast.raysPerCycle > 1.2 * slow.raysPerCycle, s"one-cycle tags: $fast vs $slow")
+    // 128 B nodes (4 beats): the beats bind either way, so the knob changes no prediction
+    assert(Throughput.predict(p4, sink(128), rays = 200, tus = 64) == Throughput.predict(p4.copy(tagForward = true), sink(128), rays = 200, tus = 64))
+  }
+
   /** An event simulation of the network the model abstracts: n TUs with one access outstanding each; accesses
     * drawn from `mix` (weight, hit, beats, path cycles, DRAM bytes); a hit is ready `path` cycles after issue, a
     * miss starts its transfer at max(issue + path, DRAM free) and its beats leave as it streams in (ready after
