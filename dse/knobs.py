@@ -75,7 +75,7 @@ KNOBS = {
     "RESP_ORDER": Knob("--resp-order", "request (one in-order stream, the paper's), path (node and primitive streams) "
                        "or tagged (the two streams, hits under misses)", _one_of(("request", "path", "tagged"))),
     "RAY_STORE": Knob("--ray-store", "0 (every request carries its ray, the paper's) or 1 (rays in each IU's ray store)", _one_of((0, 1))),
-    "TAG_FORWARD": Knob("--tag-forward", "0 (cache tags take one lookup per two cycles, the paper's) or 1 (one per cycle, forwarding the set just written)", _one_of((0, 1))),
+    "TAG_FORWARD": Knob("--tag-forward", "0 (cache tags take one lookup per two cycles) or 1 (one per cycle, forwarding the set just written)", _one_of((0, 1))),
     "M": Knob("--m", "2, 4 or 8", _one_of((2, 4, 8))),
     "MPPL": Knob("--mppl", "an integer 1..16", _int(1, 16)),
     "STACK": Knob("--stack-depth", "an integer 1..4096", _int(1, 4096)),

@@ -118,7 +118,7 @@ object CostModel {
         throw new InputError(s"the cost model is calibrated on in-order answers only (RESP_ORDER=request); RESP_ORDER=${p.respOrder} needs FIDELITY=yosys")
       if (p.rayStore)
         throw new InputError("the cost model is calibrated on requests that carry their rays; RAY_STORE=1 needs FIDELITY=yosys")
-      // the forwarding register and mux of each tag array have no term
+      // the fit has no term for the early accept and the write-first tag RAMs of one lookup per cycle
       if (p.tagForward && (p.nodeCache.entries > 0 || p.primCache.entries > 0))
         throw new InputError("the cost model is calibrated on tag pipelines of one lookup per two cycles; TAG_FORWARD=1 with a cache needs FIDELITY=yosys")
       val scale = familyScale.getOrElse(fam, throw new InputError(

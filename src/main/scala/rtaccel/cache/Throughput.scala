@@ -139,7 +139,7 @@ object Throughput {
     // a cached path's tags take one lookup per two cycles (TAG_FORWARD=1: per cycle), in series with its response
     // port: a path serves at the slower of its beats and its lookups, which are the lookups only for one-beat lines
     // (docs/caches.md, "One lookup per cycle"; no term where every line is two or more beats)
-    val tagCycles = if (p.tagForward) 1.0 else 2.0
+    val tagCycles = p.tagLookupCycles.toDouble
     val nodeTags = s.nodeCache.fold(0.0)(_ => tagCycles * s.nodeAccesses / n)
     val primTags = s.primCache.fold(0.0)(_ => tagCycles * s.leafAccesses / n)
     // RESP_ORDER=request: one stream over both paths and one response port; path: a stream and a port per path

@@ -48,16 +48,10 @@ object Cli {
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus), ius = a.int("ius", base.ius), memChannels = a.int("mem-channels", base.memChannels),
       respByPath = respOrder.fold(base.respByPath)(_ != RespOrder.Request),
       respTagged = respOrder.fold(base.respTagged)(_ == RespOrder.Tagged),
-      rayStore = a.opt("ray-store").map {
-        case "0" => false
-        case "1" => true
-        case v => throw new InputError(s"RAY_STORE=$v: use 1 (rays kept in each IU's ray store, requests carry the TU's index) or 0 (every request carries its ray, the paper's)")
-      }.getOrElse(base.rayStore),
-      tagForward = a.opt("tag-forward").map {
-        case "0" => false
-        case "1" => true
-        case v => throw new InputError(s"TAG_FORWARD=$v: use 1 (cache tags take one lookup per cycle, forwarding the set just written) or 0 (one lookup per two cycles, the paper's)")
-      }.getOrElse(base.tagForward),
+      rayStore = a.switch("ray-store", "RAY_STORE", base.rayStore,
+        "1 (rays kept in each IU's ray store, requests carry the TU's index) or 0 (every request carries its ray, the paper's)"),
+      tagForward = a.switch("tag-forward", "TAG_FORWARD", base.tagForward,
+        "1 (cache tags take one lookup per cycle, forwarding the set just written) or 0 (one lookup per two cycles)"),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),
@@ -145,6 +139,12 @@ final case class Args(kv: Map[String, String]) {
   def path(k: String): Path = Paths.get(need(k))
   def int(k: String, default: Int): Int = opt(k).map(v => v.toIntOption.getOrElse(
     throw new InputError(s"--$k must be an integer (got '$v')"))).getOrElse(default)
+  /** A 0/1 knob (make variable `name`); `meaning` says what each value does in the error for any other value. */
+  def switch(k: String, name: String, default: Boolean, meaning: String): Boolean = opt(k).map {
+    case "0" => false
+    case "1" => true
+    case v => throw new InputError(s"$name=$v: use $meaning")
+  }.getOrElse(default)
   def double(k: String, default: Double): Double = opt(k).map(v => v.toDoubleOption.filter(!_.isNaN).getOrElse(
     throw new InputError(s"--$k must be a number (got '$v')"))).getOrElse(default)
 }

@@ -200,6 +200,9 @@ final case class PlatformParams(
   val tuBits: Int = math.max(1, 32 - Integer.numberOfLeadingZeros(tus - 1))
   /** TUs per IU cluster: TU i belongs to cluster i / tusPerIu (its IU, MC and caches). */
   val tusPerIu: Int = tus / ius
+  /** Cycles a cache path's tag stage holds each lookup: read, then decide and write; TAG_FORWARD=1 overlaps the
+    * next lookup's read with the write (CachePath; the throughput model's tag rate) */
+  val tagLookupCycles: Int = if (tagForward) 1 else 2
   /** RESP_ORDER's name, as outputs record it */
   def respOrder: String = RespOrder.name(respByPath, respTagged)
   /** RESP_ORDER=tagged: bits of a response tag, the requesting TU's index within its IU cluster (0: untagged) */

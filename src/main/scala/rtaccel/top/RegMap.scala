@@ -54,7 +54,7 @@ object RegMap {
     Field("RESP_ORDER", 18, 1, "0 = the MC answers in request order (the paper's), 1 = RESP_ORDER=path or tagged: node and primitive responses each in their own order"),
     Field("RESP_TAGGED", 19, 1, "1 = RESP_ORDER=tagged: each stream answers in any order, tagged by TU (hits under misses; RESP_ORDER is 1 too)"),
     Field("RAY_STORE", 20, 1, "1 = RAY_STORE=1: each IU keeps its TUs' rays in a ray store; requests carry the TU's index, not the ray"),
-    Field("TAG_FORWARD", 21, 1, "1 = TAG_FORWARD=1: every cache path's tags take one lookup per cycle (0: one per two cycles, the paper's)"),
+    Field("TAG_FORWARD", 21, 1, "1 = TAG_FORWARD=1: every cache path's tags take one lookup per cycle (0: one per two cycles)"),
     Field("IUS", 24, 8, "intersection units (IU clusters, each with its own MC and caches; CONFIG0.TUS / IUS TUs each)")))
   val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
     Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,
