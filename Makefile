@@ -22,7 +22,7 @@ RUN_CONFIG ?= paper2017
 RUN_NODE_CACHE ?= 8192
 # A preset is the whole platform it names (caches included); each variable given overrides one field, an
 # absent one keeps the preset's value (README "Configurations").
-PLATFORM_KNOBS = $(if $(M),--m $(M)) $(if $(MPPL),--mppl $(MPPL)) $(if $(TUS),--tus $(TUS)) $(if $(IUS),--ius $(IUS)) $(if $(MEM_CHANNELS),--mem-channels $(MEM_CHANNELS)) $(if $(RESP_ORDER),--resp-order $(RESP_ORDER)) $(if $(RAY_STORE),--ray-store $(RAY_STORE)) $(if $(TAG_FORWARD),--tag-forward $(TAG_FORWARD)) \
+PLATFORM_KNOBS = $(if $(M),--m $(M)) $(if $(MPPL),--mppl $(MPPL)) $(if $(TUS),--tus $(TUS)) $(if $(IUS),--ius $(IUS)) $(if $(MEM_CHANNELS),--mem-channels $(MEM_CHANNELS)) $(if $(RESP_ORDER),--resp-order $(RESP_ORDER)) $(if $(RAY_STORE),--ray-store $(RAY_STORE)) $(if $(TAG_FORWARD),--tag-forward $(TAG_FORWARD)) $(if $(NODE_BANKS),--node-banks $(NODE_BANKS)) \
   $(if $(STACK),--stack-depth $(STACK)) $(if $(SHORT_STACK),--short-stack $(SHORT_STACK)) $(if $(BOX_FORMAT),--box-format $(BOX_FORMAT)) \
   $(if $(TRI_TEST),--tri-test $(TRI_TEST)) $(if $(TRI_FORMAT),--tri-format $(TRI_FORMAT)) $(if $(NODE_FORMAT),--node-format $(NODE_FORMAT)) $(if $(PRIM_FORMAT),--prim-format $(PRIM_FORMAT)) $(if $(BOARD),--board $(BOARD)) $(if $(MEM_GBPS),--mem-gbps $(MEM_GBPS)) \
   $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ)) $(CACHE_FLAGS)

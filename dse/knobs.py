@@ -76,6 +76,8 @@ KNOBS = {
                        "or tagged (the two streams, hits under misses)", _one_of(("request", "path", "tagged"))),
     "RAY_STORE": Knob("--ray-store", "0 (every request carries its ray, the paper's) or 1 (rays in each IU's ray store)", _one_of((0, 1))),
     "TAG_FORWARD": Knob("--tag-forward", "0 (cache tags take one lookup per two cycles) or 1 (one per cycle, forwarding the set just written)", _one_of((0, 1))),
+    "NODE_BANKS": Knob("--node-banks", "0 (a node cache per IU) or a power of two 1..64 (one node cache shared by every IU, "
+                       "in that many banks)", _one_of((0, 1, 2, 4, 8, 16, 32, 64))),
     "M": Knob("--m", "2, 4 or 8", _one_of((2, 4, 8))),
     "MPPL": Knob("--mppl", "an integer 1..16", _int(1, 16)),
     "STACK": Knob("--stack-depth", "an integer 1..4096", _int(1, 4096)),

@@ -8,6 +8,11 @@ import rtaccel.config.{CacheParams, CachePolicy}
   * `entriesPerLine`). A request's line id is `lineOf(id)`; set index = low log2(sets) bits of the line id,
   * tag = the rest (paper 6.2; the model keeps the whole line id as the tag).
   *
+  * banks = k > 1 (NODE_BANKS, the shared node cache): k banks of lines / k lines each, a line in bank
+  * (line mod k) at set (line / k) mod (sets / k) of that bank, as the RTL's banks see it (rtaccel.cache.hw.NodeBanks);
+  * a bank's sets are kept contiguously, so the model is the RTL's structure set for set. With k dividing every
+  * array's sets each line has one set either way, so the counts equal one unbanked cache fed each set's order.
+  *
   * Policies (exact rules in docs/caches.md):
   *  - dm, lru, plru: plain set-associative cache (dm = 1 way), every miss fills.
   *  - lrp: LRU sets + LevelPolicy on the victim; a refused fill is a bypass (cache unchanged).
@@ -17,7 +22,8 @@ import rtaccel.config.{CacheParams, CachePolicy}
   *    LevelPolicy.allocate(its level, incoming); otherwise the side cache is offered the line under LRP rules;
   *    refused there too = bypass.
   */
-final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int => Int = identity, entriesPerLine: Int = 1) {
+final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int => Int = identity, entriesPerLine: Int = 1,
+                       val banks: Int = 1) {
   require(c.entries > 0, "CacheModel needs entries > 0 (0 means no cache)")
   require(entriesPerLine >= 1, "entries per line must be positive")
   val lines: Int = math.max(1, c.entries / entriesPerLine)
@@ -27,7 +33,12 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
   val policy: ReplacementPolicy = Policies.of(c.policy, ways)
   private val maxLevel = c.maxLevel
   val sets: Int = lines / ways
-  private val setMask = sets - 1
+  require(banks >= 1 && Integer.bitCount(banks) == 1 && sets % banks == 0,
+    s"$banks banks must be a power of two dividing the cache's $sets sets")
+  private val bankBits = Integer.numberOfTrailingZeros(banks)
+  /** the set of `line` in an array of `n` sets: bank (line mod banks), then (line / banks) mod (n / banks) in it */
+  private def setIn(line: Int, n: Int): Int =
+    if (banks == 1) line & (n - 1) else (line & (banks - 1)) * (n / banks) + ((line >>> bankBits) & (n / banks - 1))
   private val tags = Array.fill(lines)(-1) // line id, -1 = empty
   private val lvls = new Array[Int](lines)
   private val state = Array.fill(sets)(policy.init)
@@ -40,6 +51,7 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
   val sideWays: Int = if (isHybrid) math.min(4, sideLines) else 0
   private val side: ReplacementPolicy = if (isHybrid) Policies.of(CachePolicy.Lru, sideWays) else null
   private val sideSets = if (isHybrid) sideLines / sideWays else 0
+  require(!isHybrid || sideSets % banks == 0, s"$banks banks must divide the hybrid side array's $sideSets sets")
   private val sTags = Array.fill(sideLines)(-1)
   private val sLvls = new Array[Int](sideLines)
   private val sState = Array.fill(sideSets)(if (isHybrid) side.init else 0)
@@ -56,7 +68,7 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
       if (line >= 0 && line < lines) { hits += 1; true } else { misses += 1; bypasses += 1; false }
     } else if (isHybrid) accessHybrid(line, level)
     else {
-      val set = line & setMask
+      val set = setIn(line, sets)
       val base = set * ways
       if (lookup(tags, state, policy, base, set, ways, line)) { hits += 1; return true }
       misses += 1
@@ -90,9 +102,9 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
   }
 
   private def accessHybrid(line: Int, level: Int): Boolean = {
-    val i = line & setMask
+    val i = setIn(line, sets)
     if (tags(i) == line) { hits += 1; return true }
-    val sset = line & (sideSets - 1)
+    val sset = setIn(line, sideSets)
     val sbase = sset * sideWays
     if (lookup(sTags, sState, side, sbase, sset, sideWays, line)) { hits += 1; return true }
     misses += 1
@@ -106,9 +118,9 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
     val line = lineOf(id)
     if (isBf) line >= 0 && line < lines
     else {
-      val base = (line & setMask) * ways
+      val base = setIn(line, sets) * ways
       (0 until ways).exists(w => tags(base + w) == line) ||
-        (isHybrid && { val b = (line & (sideSets - 1)) * sideWays; (0 until sideWays).exists(w => sTags(b + w) == line) })
+        (isHybrid && { val b = setIn(line, sideSets) * sideWays; (0 until sideWays).exists(w => sTags(b + w) == line) })
     }
   }
 }

@@ -28,21 +28,32 @@ final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[C
     nodeCache.map(CacheCounts.of), primCache.map(CacheCounts.of))
 }
 
-/** IUS > 1: each IU cluster has its own caches (rtaccel.top.RtAccelTop); `sinks(c)` is cluster c's. */
+/** IUS > 1: each IU cluster has its own caches (rtaccel.top.RtAccelTop); `sinks(c)` is cluster c's.
+  * NODE_BANKS > 0: the clusters share one banked node cache (`shared`, in every cluster's sink) and keep their own
+  * primitive caches.
+  */
 final class ClusterSinks(p: rtaccel.config.PlatformParams) {
-  val sinks: IndexedSeq[CacheSink] = IndexedSeq.fill(p.ius)(CacheSink(p))
-  /** The platform's view: the clusters' counts summed (what the RTL's counters show). */
-  def total: SinkCounts = sinks.map(_.counts).reduce(_ + _)
+  val shared: Option[CacheModel] = if (p.nodeShared) CacheSink.nodeModel(p) else None
+  val sinks: IndexedSeq[CacheSink] = IndexedSeq.fill(p.ius)(shared.fold(CacheSink(p))(s => CacheSink(p, Some(s))))
+  /** The platform's view: the clusters' counts summed (what the RTL's counters show); a shared node cache once. */
+  def total: SinkCounts = {
+    val t = sinks.map(_.counts).reduce(_ + _)
+    shared.fold(t)(s => t.copy(nodeCache = Some(CacheCounts.of(s))))
+  }
 }
 
 object CacheSink {
   /** The node and primitive cache models of a configuration (None where entries = 0). The primitive cache's
     * lines hold one leaf of up to MPPL primitives. Throws on bad geometry.
     */
-  def apply(p: rtaccel.config.PlatformParams): CacheSink = new CacheSink(
-    if (p.nodeCache.entries > 0) Some(new CacheModel(p.nodeCache, code(p))) else None,
+  def apply(p: rtaccel.config.PlatformParams): CacheSink = apply(p, nodeModel(p))
+  /** The same with a given node cache model (NODE_BANKS: the one every cluster shares). */
+  def apply(p: rtaccel.config.PlatformParams, node: Option[CacheModel]): CacheSink = new CacheSink(node,
     if (p.primCache.entries > 0) Some(new CacheModel(p.primCache, code(p), identity, p.mppl)) else None,
     p.nodeAccessBytes, p.leafBytes)
+  /** The node cache model of a configuration (None without one): NODE_BANKS > 0 banks it as the RTL does. */
+  def nodeModel(p: rtaccel.config.PlatformParams): Option[CacheModel] =
+    if (p.nodeCache.entries > 0) Some(new CacheModel(p.nodeCache, code(p), identity, 1, math.max(1, p.nodeBanks))) else None
   /** the level code the platform's caches use */
   def code(p: rtaccel.config.PlatformParams): rtaccel.cache.policy.LevelPolicy.Code = rtaccel.cache.policy.LevelPolicy.Code(p.hw.levelCodeBits)
 }

@@ -14,10 +14,12 @@ object CacheReport {
   def simulate(p: PlatformParams, counters: Map[String, Long], logged: Seq[Array[Int]], rows: Array[Int], codec: RefCodec): Report = {
     val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
     if (!cached) return Report(absent, absent, ujson.Null)
-    require(logged.length == p.ius, s"one access log per IU cluster: ${logged.length} logs for IUS=${p.ius}")
-    // each cluster's caches replay that cluster's own log; the RTL's counters are the clusters' sums
+    require(logged.length == p.memControllers, s"one access log per MC: ${logged.length} logs for IUS=${p.ius} NODE_BANKS=${p.nodeBanks}")
+    // each cluster's caches replay that cluster's own log; the RTL's counters are the clusters' sums. NODE_BANKS: the
+    // logs after the clusters' are the node banks', each the order its bank saw, replayed into the one shared node
+    // cache model (banked as the RTL is: each bank's sets see exactly that bank's order)
     val clusters = new ClusterSinks(p)
-    for ((log, c) <- logged.zipWithIndex) Replay.refs(log, codec, clusters.sinks(c))
+    for ((log, c) <- logged.zipWithIndex) Replay.refs(log, codec, clusters.sinks(math.min(c, p.ius - 1)))
     val same = clusters.total; val geometry = clusters.sinks.head // the clusters' caches are alike
     val interC = new ClusterSinks(p); Replay.clustered(rows, p, interC); val inter = interC.total
     var ok = true

@@ -70,7 +70,7 @@ object CacheSim {
     }.minBy(_._2)
     val j = ujson.Obj(
       "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
-      "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "resp_order" -> p.respOrder, "ray_store" -> p.rayStore, "tag_forward" -> p.tagForward, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
+      "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "resp_order" -> p.respOrder, "ray_store" -> p.rayStore, "tag_forward" -> p.tagForward, "node_banks" -> p.nodeBanks, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
       "node_accesses" -> sink.nodeAccesses.toDouble, "leaf_accesses" -> sink.leafAccesses.toDouble,
       "node_cache" -> stats(sink.nodeCache, geometry.nodeCache, node), "prim_cache" -> stats(sink.primCache, geometry.primCache, prim),
       "node_bytes_per_ray" -> nodeBpr, "prim_bytes_per_ray" -> primBpr, "dram_bytes_per_ray" -> (nodeBpr + primBpr),

@@ -52,6 +52,7 @@ object Cli {
         "1 (rays kept in each IU's ray store, requests carry the TU's index) or 0 (every request carries its ray, the paper's)"),
       tagForward = a.switch("tag-forward", "TAG_FORWARD", base.tagForward,
         "1 (cache tags take one lookup per cycle, forwarding the set just written) or 0 (one lookup per two cycles)"),
+      nodeBanks = a.int("node-banks", base.nodeBanks),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),

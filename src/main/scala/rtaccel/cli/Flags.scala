@@ -24,6 +24,7 @@ object Flags {
     f("resp-order", "MC response order: request (one stream in request order, the paper's) | path (node and primitive streams, each in its own order, so a hit never waits behind the other path's miss) | tagged (the two streams, each in any order, tagged by TU: hits under misses) (RESP_ORDER=)"),
     f("ray-store", "1: each IU keeps its TUs' rays in a ray store written by the TC, requests carry the TU's index and not the ray; 0: the paper's (RAY_STORE=)"),
     f("tag-forward", "1: every cache path's tags take one lookup per cycle (the set just written is forwarded to the next lookup); 0: one per two cycles (TAG_FORWARD=)"),
+    f("node-banks", "k >= 1: one node cache of NODE_CACHE entries shared by every IU, in k banks by the node id's low bits (needs RESP_ORDER=tagged); 0: a node cache per IU (NODE_BANKS=)"),
     f("short-stack", "ring of that many entries with restart instead of the full stack (SHORT_STACK=)"),
     f("box-format", "arithmetic of the ray-box test: fp32 | fp24 | bf16 | fp16 | e<E>m<M> | m<M> (BOX_FORMAT=; narrower ones round outward; m<M> fits the exponent to the scene)"),
     f("tri-test", "ray-triangle test: mt (Moller-Trumbore, the paper's) | watertight (Woop et al. 2013) (TRI_TEST=)"),

@@ -69,7 +69,7 @@ object RooflineCmd {
     val res = Roofline.resources(p)
     val sb = new StringBuilder(s"# scene=$label triangles=${scene.triangles} rays=${rays.count} config=${p.name} M=${p.m} " +
       s"MPPL=${p.mppl} clock_mhz=${p.clockMhz} mem_bytes_per_s=${p.memory.bytesPerSecond} sustained=${p.memory.sustainedEfficiency} " +
-      s"ius=${list.map(_._2).distinct.mkString(",")} mem_channels=${res.memChannels} resp_order=${p.respOrder} ray_store=${if (p.rayStore) 1 else 0} tag_forward=${if (p.tagForward) 1 else 0} node_cache=${SweepTus.desc(p.nodeCache)} prim_cache=${SweepTus.desc(p.primCache)} " +
+      s"ius=${list.map(_._2).distinct.mkString(",")} mem_channels=${res.memChannels} resp_order=${p.respOrder} ray_store=${if (p.rayStore) 1 else 0} tag_forward=${if (p.tagForward) 1 else 0} node_banks=${p.nodeBanks} node_cache=${SweepTus.desc(p.nodeCache)} prim_cache=${SweepTus.desc(p.primCache)} " +
       s"binds_at=${Roofline.bindsAt} rtaccel=${Cli.version}\n")
     sb ++= columns.mkString(",") + "\n"
     for (pt <- points) sb ++= columns.map(c => cell(pt.value.getOrElse(c, ujson.Null))).mkString(",") + "\n"

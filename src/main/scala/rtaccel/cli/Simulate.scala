@@ -163,7 +163,7 @@ object Simulate {
       (if (p.boxFormat != rtaccel.fp.FpFormat.fp32) s"-box${p.boxFormat.name}" else "") +
       (if (p.triTest != rtaccel.config.TriTest.Mt) s"-tri${p.triTest.name}" else "") +
       (if (p.triFormat != rtaccel.fp.FpFormat.fp32) s"-tri${p.triFormat.name}" else "") +
-      (if (p.respByPath) s"-r${p.respOrder}" else "") + (if (p.rayStore) "-raystore" else "") + (if (p.tagForward) "-tagfwd" else "") +
+      (if (p.respByPath) s"-r${p.respOrder}" else "") + (if (p.rayStore) "-raystore" else "") + (if (p.tagForward) "-tagfwd" else "") + (if (p.nodeShared) s"-banks${p.nodeBanks}" else "") +
       (if (p.primPacked) s"-packed${p.mppl}" else "") + // the leaf row (MPPL records) is a constant of the MC
       (if (p.nodeQuantBits > 0) s"-node${Numerics.nodeFormatName(p.nodeQuantBits)}" else "") +
       s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + // HwLimits: in the digest
@@ -224,7 +224,7 @@ object Simulate {
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
       // and against the model's N-TU interleaved order (the fast model's prediction)
       // one log per IU cluster, each the order its own caches saw
-      val logged = if (!cached) Seq.fill(p.ius)(Array.empty[Int]) else Seq.tabulate(p.ius) { c =>
+      val logged = if (!cached) Seq.fill(p.memControllers)(Array.empty[Int]) else Seq.tabulate(p.memControllers) { c =>
         val nLog = dut.io.logCount(c).peek().litValue.toInt
         if (nLog > logCap) throw new InputError(s"the RTL made $nLog accesses, more than the model's ${accessRows.length / 5}")
         val w = SimSetup.logWords; val a = new Array[Int](nLog)
@@ -254,7 +254,7 @@ object Simulate {
         "sim_cycles_per_cpu_s" -> stepped / math.max(1e-9, simCpu), "sim_cpu_s" -> simCpu,
         // where the wall time went: model + inputs, simulator build (or cache load) + host setup, the run, readout and checks
         "wall_model_s" -> modelWall, "wall_build_s" -> (tSim - t0) / 1e9, "wall_readout_s" -> (System.nanoTime() - tEnd) / 1e9,
-        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "resp_order" -> p.respOrder, "ray_store" -> p.rayStore, "tag_forward" -> p.tagForward, "m" -> p.m, "mppl" -> p.mppl,
+        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "resp_order" -> p.respOrder, "ray_store" -> p.rayStore, "tag_forward" -> p.tagForward, "node_banks" -> p.nodeBanks, "m" -> p.m, "mppl" -> p.mppl,
         "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "model_restarts" -> stats.restarts.toDouble, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
         "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> rtlReadError.count(identity),

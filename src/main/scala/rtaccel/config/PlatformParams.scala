@@ -127,7 +127,11 @@ final case class PlatformParams(
   // TAG_FORWARD=1: every cache path's tag pipeline accepts one lookup per cycle, the set a lookup writes forwarded to
   // the next lookup's decision (read after write); 0: one lookup per two cycles (read, then decide and write), as
   // the paper's pipeline (docs/caches.md, "One lookup per cycle")
-  tagForward: Boolean = false
+  tagForward: Boolean = false,
+  // NODE_BANKS=k (k >= 1): one node cache of nodeCache.entries serves every IU, in k banks chosen by the low bits of
+  // the node id, each bank a tag pipeline and data RAM of entries / k lines behind a crossbar; 0: each IU cluster has
+  // a node cache of its own of nodeCache.entries (docs/caches.md, "Shared node cache")
+  nodeBanks: Int = 0
 ) {
   require(!respTagged || respByPath, "RESP_ORDER=tagged answers on the two path streams; set respByPath with respTagged")
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
@@ -157,6 +161,22 @@ final case class PlatformParams(
   for ((what, c) <- Seq("NODE" -> nodeCache, "PRIM" -> primCache))
     require(c.maxLevel <= hw.maxLevelCode, s"MAX_LEVEL must be 0..${hw.maxLevelCode} for a ${hw.levelCodeBits}-bit level code (got ${c.maxLevel} on the $what cache)")
   require(refs.levelBits <= 31, "level field too wide")
+  require(nodeBanks >= 0 && nodeBanks <= 64 && (nodeBanks == 0 || Integer.bitCount(nodeBanks) == 1),
+    s"NODE_BANKS must be 0 (a node cache per IU) or a power of two 1..64 (got $nodeBanks)")
+  if (nodeBanks > 0) {
+    require(nodeCache.entries > 0, s"NODE_BANKS=$nodeBanks shares the node cache, but NODE_CACHE=0; give NODE_CACHE entries or set NODE_BANKS=0")
+    require(respTagged, s"NODE_BANKS=$nodeBanks answers each IU from several banks, in any order; use RESP_ORDER=tagged")
+    require(nodeCache.policy != CachePolicy.Bf,
+      s"NODE_BANKS=$nodeBanks: the static buffer (NODE_POLICY=bf) preloads by node id and is not banked; use dm|lru|plru|lrp|hybrid or NODE_BANKS=0")
+    val sets = nodeCache.entries / nodeCache.ways
+    require(sets % nodeBanks == 0,
+      s"NODE_BANKS=$nodeBanks must divide the node cache's $sets sets (NODE_CACHE=${nodeCache.entries} / NODE_WAYS=${nodeCache.ways}); use fewer banks or more entries")
+    if (nodeCache.policy == CachePolicy.Hybrid) {
+      val side = math.max(1, nodeCache.entries / 8); val sideSets = side / math.min(4, side)
+      require(sideSets % nodeBanks == 0,
+        s"NODE_BANKS=$nodeBanks must divide the hybrid side array's $sideSets sets (NODE_CACHE=${nodeCache.entries} / 32); use fewer banks or more entries")
+    }
+  }
 
   /** Bytes one node occupies: M x (6 floats + ref) = 28*M, rounded up to a power of two so a node id
     * maps to an address by a shift (QBVH: 112 B stored in 128 B, as in the paper).
@@ -207,6 +227,15 @@ final case class PlatformParams(
   def respOrder: String = RespOrder.name(respByPath, respTagged)
   /** RESP_ORDER=tagged: bits of a response tag, the requesting TU's index within its IU cluster (0: untagged) */
   val respTagBits: Int = if (respTagged) math.max(1, 32 - Integer.numberOfLeadingZeros(tusPerIu - 1)) else 0
+  /** NODE_BANKS > 0: the node cache is one, shared by every IU cluster (rtaccel.cache.hw.NodeBanks) */
+  val nodeShared: Boolean = nodeBanks > 0
+  /** bits of the bank number, the low bits of a node id (NODE_BANKS = 2^this; 0 without banks) */
+  val nodeBankBits: Int = if (nodeBanks > 1) Integer.numberOfTrailingZeros(nodeBanks) else 0
+  /** bits naming an IU cluster (0 for one) */
+  val clusterBits: Int = if (ius > 1) 32 - Integer.numberOfLeadingZeros(ius - 1) else 0
+  /** the memory controllers, each with an access order of its own (simulation logs one per MC): one per IU
+    * cluster, then one per node bank */
+  val memControllers: Int = ius + nodeBanks
   val cyclesPerSecond: Double = clockMhz * 1e6
   /** Sustained DRAM bytes per cycle of ONE channel: MEM_GBPS is per channel, since each of the MEM_CHANNELS is an
     * AXI4 master with a DRAM of its own, and the simulator models each channel alone (sim.DramModel at this rate).

@@ -72,8 +72,10 @@ object McCounters {
   }
 }
 
-/** Sizes shared by the MC and its paths. */
-final case class McGeometry(p: PlatformParams, axi: AxiParams) {
+/** Sizes shared by the MC and its paths. extraTagBits: tag bits above the TU's index (a node bank's MC: the
+  * requesting IU cluster, rtaccel.cache.hw.NodeBanks).
+  */
+final case class McGeometry(p: PlatformParams, axi: AxiParams, extraTagBits: Int = 0) {
   require(axi.beatBytes <= p.primStrideBytes && axi.beatBytes <= p.nodeSlotBytes,
     s"an AXI beat (${axi.beatBytes} B) must not exceed a node (${p.nodeSlotBytes} B) or a primitive slot (${p.primStrideBytes} B); narrow the bus")
   val nodeBeats: Int = p.nodeSlotBytes / axi.beatBytes
@@ -83,7 +85,8 @@ final case class McGeometry(p: PlatformParams, axi: AxiParams) {
   val maxBeats: Int = math.max(nodeBeats, leaf.maxBeats)
   val beatsBits: Int = log2Ceil(maxBeats + 1)
   /** RESP_ORDER=tagged: bits of the requester tag every request and response beat carries (0: untagged) */
-  val tagBits: Int = p.respTagBits
+  val tagBits: Int = p.respTagBits + extraTagBits
+  require(extraTagBits == 0 || p.respTagBits > 0, "extra tag bits need RESP_ORDER=tagged")
   def memReq = new MemReq(axi.addrBits, beatsBits)
   def pathReq = new PathReq(axi.addrBits, beatsBits, p.hw.levelCodeBits, tagBits)
   /** a beat towards the requester (tagged with RESP_ORDER=tagged) */
@@ -215,11 +218,13 @@ class BurstSplitter(g: McGeometry, id: Int = 0) extends Module {
   * each path gets a response buffer of that many beats; a path's DRAM read is granted only if its buffer has
   * room for all its beats (credits), so R never waits on the order mux and cannot deadlock; backpressure then
   * stops AR issue instead of holding R.
+  * A node bank's MC (NODE_BANKS, rtaccel.cache.hw.NodeBanks): extraTagBits widen the tag by the requesting cluster,
+  * and its node path sees line = node id >> nodeLineShift (the id without the bank bits, as a bank indexes its sets).
   */
 class MemoryController(p: PlatformParams, axi: AxiParams,
                        pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
-                       respBufferBeats: Int = 0) extends Module {
-  val g = McGeometry(p, axi)
+                       respBufferBeats: Int = 0, extraTagBits: Int = 0, nodeLineShift: Int = 0) extends Module {
+  val g = McGeometry(p, axi, extraTagBits)
   private val ap = axi
   private val maxOutstanding = p.hw.mcOutstanding
   val io = IO(new Bundle {
@@ -279,7 +284,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     path.io.in.valid := io.req.valid && orderReady && target === i.U
     path.io.in.bits.addr := (if (i == NodePath) nodeAddr else primAddr)
     path.io.in.bits.beats := (if (i == NodePath) g.nodeBeats.U else g.leaf.beats(count))
-    path.io.in.bits.line := (if (i == NodePath) nodeId else first).pad(32)
+    path.io.in.bits.line := (if (i == NodePath) nodeId >> nodeLineShift else first).pad(32)
     path.io.in.bits.level := (if (i == NodePath) nodeLevel else 0.U)
     for (t <- path.io.in.bits.tag) t := io.req.bits.tag.get
     path.io.primBase := io.primBase

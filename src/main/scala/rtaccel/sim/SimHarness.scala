@@ -65,8 +65,9 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val readIdx = Input(UInt(32.W))
     val readData = Output(UInt(RtAccelTop.HitBits.W))
     // per IU cluster: entries readIdx * logWords .. + logWords - 1 of its log, the first lowest
-    val logCount = Output(Vec(p.ius, UInt(32.W)))
-    val logData = Output(Vec(p.ius, UInt((32 * SimSetup.logWords).W)))
+    // (then per node bank with NODE_BANKS: one log per MC, p.memControllers)
+    val logCount = Output(Vec(p.memControllers, UInt(32.W)))
+    val logData = Output(Vec(p.memControllers, UInt((32 * SimSetup.logWords).W)))
   })
   // one DRAM model per memory channel, each holding the whole image (the channel only decides who serves an
   // address) with its own bandwidth and latency; channel k > 0 draws its jitter from its own seed

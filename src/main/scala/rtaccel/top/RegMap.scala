@@ -26,7 +26,7 @@ object RegMap {
 
   /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
   val VersionMajor = 2
-  val VersionMinor = 6
+  val VersionMinor = 7
   val Magic: Long = 0x52544143L // "RTAC"
 
   val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
@@ -37,10 +37,13 @@ object RegMap {
   val Config1 = Reg("CONFIG1", 0x00C, RO, "traversal stack and reference format", Seq(
     Field("STACK_DEPTH", 0, 16, "entries per TU stack"), Field("LEVEL_BITS", 16, 4, "level field of a node reference"),
     Field("COUNT_BITS", 20, 4, "leaf count field"), Field("NODE_ID_BITS", 24, 8, "node id field")))
-  val NodeCache = Reg("NODE_CACHE", 0x010, RO, "node cache geometry", Seq(
+  private val cacheFields = Seq(
     Field("LOG2_ENTRIES", 0, 5, "log2 of the entries (valid when PRESENT)"), Field("PRESENT", 5, 1, "the cache is built"),
-    Field("WAYS", 8, 8, "ways"), Field("POLICY", 16, 4, "0 dm, 1 lru, 2 plru, 3 lrp, 4 bf, 5 hybrid")))
-  val PrimCache = Reg("PRIM_CACHE", 0x014, RO, "primitive cache geometry (fields as NODE_CACHE)", NodeCache.fields)
+    Field("WAYS", 8, 8, "ways"), Field("POLICY", 16, 4, "0 dm, 1 lru, 2 plru, 3 lrp, 4 bf, 5 hybrid"))
+  val NodeCache = Reg("NODE_CACHE", 0x010, RO, "node cache geometry", cacheFields ++ Seq(
+    Field("SHARED", 6, 1, "1 = NODE_BANKS > 0: one node cache of LOG2_ENTRIES serves every IU, in 2^BANKS_LOG2 banks (0: one such cache per IU)"),
+    Field("BANKS_LOG2", 20, 3, "log2 of the node cache's banks (valid when SHARED)")))
+  val PrimCache = Reg("PRIM_CACHE", 0x014, RO, "primitive cache geometry (the fields of NODE_CACHE but SHARED and BANKS_LOG2; one per IU)", cacheFields)
   val Formats = Reg("FORMATS", 0x018, RO, "arithmetic and memory formats", Seq(
     Field("BOX_FP", 0, 4, "0 = fp32, 1 = the narrower format of BOX_EXP_BITS / BOX_MAN_BITS, rounded outward"), Field("TRI_FP", 4, 4, "0 = fp32, 1 = the wider format of FORMATS2.TRI_EXP_BITS / TRI_MAN_BITS (TRI_FORMAT)"), Field("NODE_BYTES_LOG2", 8, 4, "bytes per node slot"),
     Field("PRIM_BYTES_LOG2", 12, 4, "bytes per primitive slot"), Field("AXI_DATA_BYTES_LOG2", 16, 4, "memory bus beat"),

@@ -5,7 +5,7 @@ import chisel3.util._
 import chisel3.experimental.BaseModule
 import rtaccel.config.PlatformParams
 import rtaccel.iu.IntersectionUnit
-import rtaccel.cache.hw.CachePath
+import rtaccel.cache.hw.{CachePath, NodeBanks}
 import rtaccel.mc.{AxiParams, AxiReadMaster, AxiReadMux, McGeometry, MemoryController}
 import rtaccel.tc.TraversalController
 import rtaccel.tu.TraversalUnit
@@ -43,7 +43,8 @@ object RtAccelTop {
     Seq(Config0 -> word(Config0, "M" -> p.m, "MAX_LEAF_PRIMS" -> math.min(255, p.refs.maxLeafPrims), "TUS" -> p.tus),
       Config1 -> word(Config1, "STACK_DEPTH" -> p.stackDepth, "LEVEL_BITS" -> p.refs.levelBits, "COUNT_BITS" -> p.refs.countBits,
         "NODE_ID_BITS" -> p.refs.nodeIdBits),
-      NodeCache -> cache(NodeCache, p.nodeCache), PrimCache -> cache(PrimCache, p.primCache),
+      NodeCache -> (cache(NodeCache, p.nodeCache) + word(NodeCache, "SHARED" -> (if (p.nodeShared) 1L else 0L), "BANKS_LOG2" -> p.nodeBankBits.toLong)),
+      PrimCache -> cache(PrimCache, p.primCache),
       Formats -> word(Formats, "NODE_BYTES_LOG2" -> log2Ceil(p.nodeSlotBytes), "PRIM_BYTES_LOG2" -> log2Ceil(p.primStrideBytes),
         "AXI_DATA_BYTES_LOG2" -> log2Ceil(p.axiDataBits / 8), "TRI_FP" -> (if (p.triFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L), "BOX_FP" -> (if (p.boxFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L),
         "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
@@ -59,8 +60,10 @@ object RtAccelTop {
   * (configuration, control, status, interrupt, counters; docs/registers.md) plus its interrupt line.
   * The node and primitive caches of p.nodeCache / p.primCache sit in the MC (none when entries = 0).
   * IUS = p.ius clusters of TUS / IUS TUs, each with its own IU, MC and caches, share the memory port.
-  * tapAccesses (simulation): `tap(c)` shows every child reference cluster c's MC accepts, so a harness can log
-  * the access order each cluster's caches saw and replay it through the trace model.
+  * NODE_BANKS > 0: the node cache is one, shared by the clusters in banks (NodeBanks), each bank with an MC of its
+  * own; a cluster's node requests go to the banks and its leaf requests to its own MC and primitive cache.
+  * tapAccesses (simulation): `tap(i)` shows every child reference MC i accepts (the clusters' MCs, then the node
+  * banks'), so a harness can log the access order each cache saw and replay it through the trace model.
   */
 class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module {
   val axiP = AxiParams.of(p)
@@ -71,7 +74,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     val memMore = if (p.memChannels > 1) Some(Vec(p.memChannels - 1, new AxiReadMaster(axiP))) else None // channels 1..
     val lite = Flipped(new AxiLite(RegMap.addrBits(RtAccelTop.counterNames)))
     val irq = Output(Bool())
-    val tap = if (tapAccesses) Some(Output(Vec(p.ius, Valid(UInt(32.W))))) else None // per IU cluster
+    val tap = if (tapAccesses) Some(Output(Vec(p.memControllers, Valid(UInt(32.W))))) else None // per IU cluster, then per node bank
   })
   val tc = Module(new TraversalController(p))
   val tus = Seq.fill(p.tus)(Module(new TraversalUnit(p)))
@@ -83,7 +86,9 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val ius = Seq.tabulate(p.ius)(c => named(Module(new IntersectionUnit(p, axiP.dataBits, p.tusPerIu)), "iu", c))
   // caches reorder DRAM traffic between the paths: give each path a response buffer (see MemoryController);
   // with several clusters the buffers also keep one cluster's R beats from waiting on another's
-  val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(p.nodeCache, p.primCache, p.mppl),
+  // NODE_BANKS > 0: the clusters' MCs have no node cache (their node path carries nothing), the banks have it
+  private val clusterNodeCache = if (p.nodeShared) rtaccel.config.CacheParams() else p.nodeCache
+  val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(clusterNodeCache, p.primCache, p.mppl),
     respBufferBeats = if (cached || p.ius > 1 || p.memChannels > 1 || p.respByPath) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
@@ -120,21 +125,46 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     w.bits.slot := (if (mine.size == 1) 0.U else OHToUInt(fires))
     w.bits.ray := mine.head.bits.ray // the TC offers every TU the same ray
   }
-  for ((iu, mc) <- ius.zip(mcs)) {
-    mc.io.req <> iu.io.mem.req
-    iu.io.mem.resp <> mc.io.resp
+  val nodeBanks = if (p.nodeShared) Some(Module(new NodeBanks(p, axiP))) else None
+  for (((iu, mc), c) <- ius.zip(mcs).zipWithIndex) {
+    nodeBanks match {
+      case None =>
+        mc.io.req <> iu.io.mem.req
+        iu.io.mem.resp <> mc.io.resp
+      case Some(nb) => // node references to the shared banks, leaves to the cluster's own MC
+        val (req, toBanks) = (iu.io.mem.req, nb.io.req(c))
+        val leaf = req.bits.childRef(p.refs.refBits - 1)
+        mc.io.req.valid := req.valid && leaf
+        mc.io.req.bits := req.bits
+        toBanks.valid := req.valid && !leaf
+        toBanks.bits := req.bits
+        req.ready := Mux(leaf, mc.io.req.ready, toBanks.ready)
+        iu.io.mem.resp <> nb.io.resp(c)
+        mc.io.resp.ready := true.B // the cluster MC's node stream stays empty
+        assert(!mc.io.resp.valid, "RtAccelTop: a cluster MC answered a node request with NODE_BANKS")
+    }
     for ((i, m) <- iu.io.mem.primResp.zip(mc.io.primResp)) i <> m // RESP_ORDER=path
     mc.io.primBase := regs.io.primBase
     mc.io.maxLevel := regs.io.maxLevel
     mc.io.clearCounters := regs.io.clearCounters
   }
-  io.tap.foreach(t => for ((ti, mc) <- t.zip(mcs)) { ti.valid := mc.io.req.fire; ti.bits := mc.io.req.bits.childRef })
+  for (nb <- nodeBanks) {
+    nb.io.primBase := regs.io.primBase
+    nb.io.maxLevel := regs.io.maxLevel
+    nb.io.clearCounters := regs.io.clearCounters
+  }
+  io.tap.foreach { t =>
+    for ((ti, mc) <- t.zip(mcs)) { ti.valid := mc.io.req.fire; ti.bits := mc.io.req.bits.childRef }
+    for (nb <- nodeBanks; (ti, bt) <- t.drop(p.ius).zip(nb.io.tap)) ti := bt
+  }
   /** The memory channels' ports, channel 0 first. */
   def memPorts: Seq[AxiReadMaster] = io.mem +: io.memMore.toSeq.flatten
-  if (p.ius == 1 && p.memChannels == 1) io.mem <> mcs.head.io.axi
+  // AXI masters: the clusters' MCs, then the node banks'
+  private val masters = mcs.map(_.io.axi) ++ nodeBanks.toSeq.flatMap(_.io.axi)
+  if (masters.length == 1 && p.memChannels == 1) io.mem <> masters.head
   else {
-    val mux = Module(new AxiReadMux(axiP, p.ius, p.hw.mcOutstanding, p.memChannels, log2Ceil(p.hw.channelInterleaveBytes)))
-    for ((m, mc) <- mux.io.in.zip(mcs)) m <> mc.io.axi
+    val mux = Module(new AxiReadMux(axiP, masters.length, p.hw.mcOutstanding, p.memChannels, log2Ceil(p.hw.channelInterleaveBytes)))
+    for ((m, a) <- mux.io.in.zip(masters)) m <> a
     for ((port, o) <- memPorts.zip(mux.io.out)) port <> o
   }
 
@@ -161,7 +191,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
     "tu_busy_cycles" -> ev(PopCount(tuBusy)))
   for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := events(n)
-  val mcc = rtaccel.mc.McCounters.sum(mcs.map(_.io.counters)) // in memoryNames order
+  val mcc = rtaccel.mc.McCounters.sum(mcs.map(_.io.counters) ++ nodeBanks.toSeq.flatMap(_.io.counters)) // in memoryNames order
   regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
     mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,
     mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses, mcc.readErrors).map(_.pad(64)))
