@@ -269,7 +269,9 @@ object Simulate {
         "dram_bytes_per_ray" -> counters("mem_busy_beats") * axi.beatBytes / n,
         "node_cache" -> cacheJson.node, "prim_cache" -> cacheJson.prim, "cache_counts_match_model" -> cacheJson.matches,
         // per IU cluster: the accesses its MC accepted (logged with a cache only): how the TC balanced the clusters
-        "cluster_accesses" -> (if (cached) ujson.Arr.from(logged.map(l => ujson.Num(l.length))) else ujson.Null),
+        "cluster_accesses" -> (if (cached) ujson.Arr.from(logged.take(p.ius).map(l => ujson.Num(l.length))) else ujson.Null),
+        // NODE_BANKS: the node references each bank of the shared node cache accepted (how evenly the ids spread)
+        "bank_accesses" -> (if (cached && p.nodeShared) ujson.Arr.from(logged.drop(p.ius).map(l => ujson.Num(l.length))) else ujson.Null),
         "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> Cli.version)
       json("roofline") = if (rays.count == 0 || cycles == 0) ujson.Null // docs/roofline.md
         else rtaccel.perf.Roofline.of(p, rtaccel.perf.Roofline.Run.fromCounters(rays.count, counters)).json

@@ -39,14 +39,14 @@ class PlatformSpec extends AnyFunSuite {
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
                      packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1,
-                     order: String = RespOrder.Request, rayStore: Boolean = false, forward: Boolean = false) = {
+                     order: String = RespOrder.Request, rayStore: Boolean = false, forward: Boolean = false, banks: Int = 0) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
       shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels,
-      respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward)
+      respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward, nodeBanks = banks)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
-    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels", memJitter = jitter, hostStall = stall,
+    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels-b$banks", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec"))
     val j = o.json
     info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +
@@ -286,13 +286,33 @@ class PlatformSpec extends AnyFunSuite {
       }
     }
 
-  private def checkClusters(j: ujson.Value, ius: Int, ch: Int, node: CacheParams, prim: CacheParams): Unit = {
+  // NODE_BANKS=k (docs/caches.md, "Shared node cache"): one node cache for every cluster, in banks behind a crossbar;
+  // the banks' counts equal the banked trace model replaying each bank's own order, and the platform stays bit-exact.
+  // make test: two clusters on two banks with one lookup per cycle, jitter and backpressure; make regress: more banks
+  // than clusters (hybrid), one bank for four clusters, two memory channels.
+  private val bankCases = Seq((2, 2, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true)) ++
+    (if (!full) Nil else Seq((2, 4, 1, 8, CacheParams(128, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(16, 2, CachePolicy.Lru), 23, 30, false),
+      (4, 1, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 0, 0, true),
+      (2, 2, 2, 4, CacheParams(64, 2, CachePolicy.Lru), CacheParams(32, 1, CachePolicy.Dm), 17, 20, false)))
+  for ((ius, banks, ch, tus, node, prim, jitter, stall, fwd) <- bankCases)
+    test(s"NODE_BANKS=$banks shared by IUS=$ius${if (ch > 1) s", MEM_CHANNELS=$ch" else ""}${if (fwd) ", TAG_FORWARD=1" else ""} at $tus TUs (node ${node.entries} ${node.policy}, " +
+        s"prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, bank counts equal the banked model") {
+      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch, order = tagged, forward = fwd, banks = banks).json
+      assert(j("node_banks").num == banks, ujson.write(j))
+      checkClusters(j, ius, ch, node, prim, banks)
+      // the clusters' MCs saw only leaves: every node reference went through a bank
+      assert(j("cluster_accesses").arr.map(_.num).sum == j("counters")("leaf_requests").num, ujson.write(j))
+    }
+
+  private def checkClusters(j: ujson.Value, ius: Int, ch: Int, node: CacheParams, prim: CacheParams, banks: Int = 0): Unit = {
     assert(j("ius").num == ius && j("roofline")("ius").num == ius && j("mem_channels").num == ch && j("roofline")("mem_channels").num == ch, ujson.write(j))
     if (node.entries > 0 || prim.entries > 0) {
       val per = j("cluster_accesses").arr.map(_.num.toLong)
-      info(s"accesses per cluster: ${per.mkString(", ")}")
+      val perBank = if (banks > 0) j("bank_accesses").arr.map(_.num.toLong).toSeq else Nil
+      info(s"accesses per cluster: ${per.mkString(", ")}${if (banks > 0) s"; per node bank: ${perBank.mkString(", ")}" else ""}")
       assert(per.length == ius && per.forall(_ > 0), s"every cluster must have worked: $per")
-      assert(per.sum == j("node_requests").num + j("counters")("leaf_requests").num, "the cluster logs must hold every access")
+      assert(perBank.length == banks && perBank.forall(_ > 0), s"every bank must have worked: $perBank")
+      assert(per.sum + perBank.sum == j("node_requests").num + j("counters")("leaf_requests").num, "the logs must hold every access")
     }
   }
 

@@ -73,8 +73,11 @@ class NodeBanks(p: PlatformParams, axiP: AxiParams) extends Module {
     val arb = Module(new RRArbiter(beat, k))
     // busy: an answer of bank `cur` has begun; only its beats may follow until its last
     val busy = RegInit(false.B); val cur = RegInit(0.U(math.max(1, log2Ceil(k)).W))
+    // open(b): bank b may give this cluster a beat now. The arbiter's ready alone may be high for an input it holds
+    // invalid, so a bank's ready takes the same condition (else a masked bank's beat would leave unseen)
+    def open(b: Int): Bool = !busy || cur === b.U
     for ((a, b) <- answers.zipWithIndex) {
-      arb.io.in(b).valid := a.valid && clusterOf(a.bits.tag.get) === c.U && (!busy || cur === b.U)
+      arb.io.in(b).valid := a.valid && clusterOf(a.bits.tag.get) === c.U && open(b)
       arb.io.in(b).bits.data := a.bits.data
       arb.io.in(b).bits.last := a.bits.last
       arb.io.in(b).bits.err := a.bits.err
@@ -82,7 +85,7 @@ class NodeBanks(p: PlatformParams, axiP: AxiParams) extends Module {
     }
     out <> arb.io.out
     when(out.fire) { busy := !out.bits.last; cur := arb.io.chosen }
-    arb.io.in.map(_.ready)
+    arb.io.in.zipWithIndex.map { case (in, b) => in.ready && open(b) }
   }
   for ((a, b) <- answers.zipWithIndex) a.ready := VecInit(takes.map(_(b)))(clusterOf(a.bits.tag.get))
 }
