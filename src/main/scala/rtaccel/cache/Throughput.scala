@@ -140,7 +140,10 @@ object Throughput {
     // port: a path serves at the slower of its beats and its lookups, which are the lookups only for one-beat lines
     // (docs/caches.md, "One lookup per cycle"; no term where every line is two or more beats)
     val tagCycles = p.tagLookupCycles.toDouble
-    val nodeTags = s.nodeCache.fold(0.0)(_ => tagCycles * s.nodeAccesses / n)
+    // NODE_BANKS: the node lookups of every cluster share the banks' tag pipelines, NODE_BANKS / IUS of them per
+    // cluster on average (ids spread evenly over the banks)
+    val nodeTagShare = if (p.nodeShared) p.ius.toDouble / p.nodeBanks else 1.0
+    val nodeTags = s.nodeCache.fold(0.0)(_ => tagCycles * nodeTagShare * s.nodeAccesses / n)
     val primTags = s.primCache.fold(0.0)(_ => tagCycles * s.leafAccesses / n)
     // RESP_ORDER=request: one stream over both paths and one response port; path: a stream and a port per path
     val (ports, streams) =

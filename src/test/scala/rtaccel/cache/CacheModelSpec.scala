@@ -206,4 +206,50 @@ class CacheModelSpec extends AnyFunSuite {
     assert(shared.nodeCache.get.misses != t.nodeCache.get.misses, "two private caches should miss differently from one shared")
     assert(intercept[IllegalArgumentException](p.copy(tus = 7)).getMessage.contains("multiple of IUS"))
   }
+
+  test("banked node cache (NODE_BANKS): k banks of entries / k lines on id / k, as the RTL's banks, count like one cache") {
+    val rnd = new scala.util.Random(17)
+    // ids with locality (a hot top and a long tail) and levels, so that every policy hits, misses and refuses
+    val seq = Seq.fill(20000) { val hot = rnd.nextInt(4) == 0; val id = if (hot) rnd.nextInt(40) else rnd.nextInt(3000); (id, math.min(15, id.toBinaryString.length / 2)) }
+    val code = rtaccel.cache.policy.LevelPolicy.Code(4)
+    for ((c, k) <- Seq(CacheParams(256, 1, CachePolicy.Dm) -> 4, CacheParams(256, 2, CachePolicy.Lru) -> 2, CacheParams(256, 4, CachePolicy.Plru) -> 8,
+        CacheParams(256, 2, CachePolicy.Lrp, maxLevel = 3) -> 4, CacheParams(512, 1, CachePolicy.Hybrid, maxLevel = 2) -> 2)) {
+      val banked = new CacheModel(c, code, identity, 1, k)
+      // the reference: k separate unbanked caches of entries / k, bank id % k seeing id / k (the RTL's line)
+      val bankBits = Integer.numberOfTrailingZeros(k)
+      val sep = Array.fill(k)(new CacheModel(c.copy(entries = c.entries / k), code))
+      val one = new CacheModel(c, code)
+      for ((id, lv) <- seq) {
+        val h = banked.access(id, lv)
+        assert(h == sep(id % k).access(id >> bankBits, lv), s"${c.policy} x$k: id $id")
+        assert(h == one.access(id, lv), s"${c.policy} x$k: id $id differs from one unbanked cache")
+      }
+      val tot = CacheCounts(sep.map(_.hits).sum, sep.map(_.misses).sum, sep.map(_.bypasses).sum)
+      assert(CacheCounts.of(banked) == tot && CacheCounts.of(one) == tot)
+      assert(tot.hits > 0 && tot.misses > 0)
+      for (id <- 0 until 3000) assert(banked.contains(id) == sep(id % k).contains(id >> bankBits))
+    }
+    assert(intercept[IllegalArgumentException](new CacheModel(CacheParams(8, 2, CachePolicy.Lru), code, identity, 1, 8)).getMessage.contains("dividing"))
+  }
+
+  test("NODE_BANKS: the clusters share one node cache (counted once), keep their own primitive caches; bad banks refused") {
+    val rows = sceneTrace._1
+    val p = rtaccel.config.Presets.paper2017.copy(tus = 8, ius = 2, respByPath = true, respTagged = true, nodeBanks = 2,
+      nodeCache = CacheParams(64, 1, CachePolicy.Dm), primCache = CacheParams(16, 1, CachePolicy.Dm))
+    val sinks = new ClusterSinks(p)
+    Replay.clustered(rows, p, sinks)
+    assert(sinks.sinks.forall(_.nodeCache.get eq sinks.shared.get) && (sinks.sinks(0).primCache.get ne sinks.sinks(1).primCache.get))
+    val t = sinks.total
+    // the same interleaving into one unbanked cache by hand: a shared cache sees every cluster's nodes in issue order
+    val m = new CacheModel(p.nodeCache, CacheSink.code(p)); Replay.interleaved(rows, 8, new CacheSink(Some(m), None, 128, c => c * 64L))
+    assert(t.nodeCache.get == CacheCounts.of(m), s"${t.nodeCache} vs ${CacheCounts.of(m)}")
+    assert(t.nodeAccesses == m.accesses && t.primCache.get.accesses == t.leafAccesses)
+    def refused(q: => rtaccel.config.PlatformParams, what: String) = assert(intercept[IllegalArgumentException](q).getMessage.contains(what))
+    refused(p.copy(respTagged = false), "RESP_ORDER=tagged")
+    refused(p.copy(nodeBanks = 3), "power of two")
+    refused(p.copy(nodeCache = CacheParams()), "NODE_CACHE=0")
+    refused(p.copy(nodeCache = CacheParams(64, 1, CachePolicy.Bf)), "NODE_POLICY=bf")
+    refused(p.copy(nodeBanks = 128), "power of two")
+    refused(p.copy(nodeCache = CacheParams(64, 64, CachePolicy.Lru)), "sets")
+  }
 }

@@ -25,7 +25,7 @@ class SimulateSpec extends AnyFunSuite {
     assert(d.matches("[0-9a-f]{10}"), d)
     assert(Simulate.paramsDigest(PlatformParams(tus = 4)) == d) // stable: the same parameters, the same build
     assert(Simulate.paramsDigest(p.copy(name = "mine", clockMhz = 200)) == d)
-    val changed = Seq(p.copy(rayStore = true), p.copy(tagForward = true), p.copy(tus = 8), p.copy(hw = p.hw.copy(cacheHitQueue = 8)),
+    val changed = Seq(p.copy(rayStore = true), p.copy(tagForward = true), p.copy(nodeCache = CacheParams(64, 1, CachePolicy.Dm), respByPath = true, respTagged = true, nodeBanks = 2), p.copy(tus = 8), p.copy(hw = p.hw.copy(cacheHitQueue = 8)),
       p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lru)), p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lrp)),
       p.copy(boxFormat = rtaccel.fp.FpFormat(8, 7)), p.copy(triTest = rtaccel.config.TriTest.Watertight))
     val ds = changed.map(Simulate.paramsDigest)
