@@ -25,7 +25,9 @@ class VerilogLintSpec extends AnyFunSuite {
       ("small", 4, 2, "--resp-order path --node-cache 64 --prim-format packed --prim-cache 64"),
       // tagged answers: clean hits beside the tickets in both caches, the IU's job tables, and the ray stores of
       // two clusters (the TC's writes routed by cluster)
-      ("small", 4, 4, "--resp-order tagged --ray-store 1 --ius 2 --node-cache 64 --prim-cache 64 --prim-ways 2")) ++
+      ("small", 4, 4, "--resp-order tagged --ray-store 1 --ius 2 --node-cache 64 --prim-cache 64 --prim-ways 2"),
+      // NODE_BANKS: one node cache in 4 banks for 2 clusters (both crossbars wider than one), one lookup per cycle
+      ("small", 4, 4, "--resp-order tagged --ius 2 --node-banks 4 --tag-forward 1 --node-cache 64 --node-ways 2 --prim-cache 64")) ++
     (if (!regress) Nil else Seq(("small", 2, 1, ""), ("paper2017-lrp", 8, 2, ""), ("small", 4, 1, "--node-cache 64 --node-policy bf"),
       ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
       ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight"),
