@@ -28,7 +28,7 @@ object CacheSim {
     CacheSink(p) // validate geometry before the traversal runs
     // Record once; the replay (1 or N TUs) is what is timed as the cache model. The access order depends on
     // the tree, the rays and the memory image, not on the caches or the TU count: Serve replays a kept trace.
-    val traceKey = (new Memo.Id(b.bvh), new Memo.Id(rays), p.copy(tus = 1, ius = 1, nodeCache = CacheParams(), primCache = CacheParams()))
+    val traceKey = (new Memo.Id(b.bvh), new Memo.Id(rays), p.copy(tus = 1, ius = 1, nodeCache = CacheParams(), primCache = CacheParams(), nodeBanks = 0))
     val traceReused = Memo.has("trace", traceKey)
     val (rows, traceS) = Memo("trace", traceKey) {
       val img = MemoryImage.pack(b.bvh, b.scene, p)

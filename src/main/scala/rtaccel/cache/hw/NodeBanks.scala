@@ -40,16 +40,12 @@ class NodeBanks(p: PlatformParams, axiP: AxiParams) extends Module {
   val banks = Seq.tabulate(k)(b => Module(new MemoryController(p, axiP, CachePath.factory(bankCache, CacheParams(), p.mppl),
     respBufferBeats = 2 * g.maxBeats, extraTagBits = p.clusterBits, nodeLineShift = p.nodeBankBits)).suggestName(s"bank_$b"))
 
-  // ---- requests: clusters -> banks (the bank number is the node id's low bits, which are the reference's)
-  private def bankOf(r: FetchReq): UInt = if (k == 1) 0.U else r.childRef(p.nodeBankBits - 1, 0)
-  private val grants = for ((bank, b) <- banks.zipWithIndex) yield {
-    val arb = Module(new RRArbiter(new FetchReq(g.tagBits), n))
-    for ((in, c) <- io.req.zipWithIndex) {
-      arb.io.in(c).valid := in.valid && bankOf(in.bits) === b.U
-      arb.io.in(c).bits.childRef := in.bits.childRef
-      arb.io.in(c).bits.tag.get := (if (n == 1) in.bits.tag.get else Cat(c.U(p.clusterBits.W), in.bits.tag.get))
-    }
-    bank.io.req <> arb.io.out
+  val xbar = Module(new BankCrossbar(n, k, p.respTagBits, p.nodeBankBits, axiP.dataBits))
+  xbar.io.req <> io.req
+  io.resp <> xbar.io.resp
+  for ((bank, b) <- banks.zipWithIndex) {
+    bank.io.req <> xbar.io.bankReq(b)
+    xbar.io.bankResp(b) <> bank.io.resp
     bank.io.primBase := io.primBase
     bank.io.maxLevel := io.maxLevel
     bank.io.clearCounters := io.clearCounters
@@ -61,14 +57,45 @@ class NodeBanks(p: PlatformParams, axiP: AxiParams) extends Module {
     io.counters(b) := bank.io.counters
     io.tap(b).valid := bank.io.req.fire
     io.tap(b).bits := bank.io.req.bits.childRef
+  }
+}
+
+/** The crossbar of NodeBanks between n clusters and k banks (its own module so that the routing can be proved on
+  * abstract banks: docs/formal.md). Requests: bank b takes, round robin, one request per cycle from the clusters
+  * whose head request's reference has b in its low `bankBits` bits, with the cluster's number put above the
+  * `innerBits` tag. Answers: each bank's beats go to the cluster named in their tag, whole answers at a time
+  * (round robin among the banks with an answer for that cluster), with the inner tag only.
+  */
+class BankCrossbar(n: Int, k: Int, innerBits: Int, bankBits: Int, dataBits: Int) extends Module {
+  require(n >= 1 && k >= 1 && innerBits >= 1 && (1 << bankBits) == k, s"BankCrossbar: $n clusters, $k banks, $bankBits bank bits")
+  private val clusterBits = if (n > 1) log2Ceil(n) else 0
+  private val beat = new FetchBeat(dataBits, innerBits)
+  private val bankBeat = new FetchBeat(dataBits, innerBits + clusterBits)
+  val io = IO(new Bundle {
+    val req = Vec(n, Flipped(Decoupled(new FetchReq(innerBits))))
+    val resp = Vec(n, Decoupled(beat))
+    val bankReq = Vec(k, Decoupled(new FetchReq(innerBits + clusterBits)))
+    val bankResp = Vec(k, Flipped(Decoupled(bankBeat)))
+  })
+
+  // ---- requests: clusters -> banks (the bank number is the node id's low bits, which are the reference's)
+  private def bankOf(r: FetchReq): UInt = if (k == 1) 0.U else r.childRef(bankBits - 1, 0)
+  private val grants = for ((out, b) <- io.bankReq.zipWithIndex) yield {
+    val arb = Module(new RRArbiter(new FetchReq(innerBits + clusterBits), n))
+    for ((in, c) <- io.req.zipWithIndex) {
+      arb.io.in(c).valid := in.valid && bankOf(in.bits) === b.U
+      arb.io.in(c).bits.childRef := in.bits.childRef
+      arb.io.in(c).bits.tag.get := (if (n == 1) in.bits.tag.get else Cat(c.U(clusterBits.W), in.bits.tag.get))
+    }
+    out <> arb.io.out
     arb.io.in.map(_.ready)
   }
+  // a cluster's request is offered to one bank only, so that bank's grant is its ready
   for ((in, c) <- io.req.zipWithIndex) in.ready := VecInit(grants.map(_(c)))(bankOf(in.bits))
 
   // ---- answers: banks -> clusters, a whole answer at a time
-  private val innerBits = p.respTagBits
-  private def clusterOf(t: UInt): UInt = if (n == 1) 0.U else t(innerBits + p.clusterBits - 1, innerBits)
-  private val answers = banks.map(_.io.resp)
+  private def clusterOf(t: UInt): UInt = if (n == 1) 0.U else t(innerBits + clusterBits - 1, innerBits)
+  private val answers = io.bankResp
   private val takes = for ((out, c) <- io.resp.zipWithIndex) yield {
     val arb = Module(new RRArbiter(beat, k))
     // busy: an answer of bank `cur` has begun; only its beats may follow until its last
