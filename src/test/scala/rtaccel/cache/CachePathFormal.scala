@@ -70,6 +70,7 @@ class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: 
     val sinkStall = Input(Bool())
     val mem = Input(new MemFree(g.axi.dataBits))
     val bugFire = Input(Bool()) // when the injected fault strikes (unused without one)
+    val answered = Output(Bool()) // an answer's last beat left (the randomized run's coverage)
   })
   // PathBug.NoForward: TAG_FORWARD's one lookup per cycle without the forwarding of the set just written
   val dut = Module(new CachePath(g, cg, forwardWrites = bug != PathBug.NoForward))
@@ -103,6 +104,7 @@ class CachePathFormal(c: CacheParams, bounds: EnvBounds, answerBound: Int, bug: 
     case PathBug.Starve => when(answeredOnce) { out.valid := false.B; dut.io.out.ready := false.B }
   }
   out.ready := !FormalEnv.stall(io.sinkStall, bounds.sinkStall)
+  io.answered := out.fire && out.bits.last
 
   // ---- monitor
   val now = FormalEnv.cycle(6)
