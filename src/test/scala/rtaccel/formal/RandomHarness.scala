@@ -11,10 +11,12 @@ import scala.util.Random
   * exercised. A failing assertion of the harness throws chiseltest's ChiselAssertionError.
   */
 trait RandomHarness extends ChiselScalatestTester { this: TestSuite =>
-  /** `cycles` cycles of `gen` from `seed`: each cycle `drive` pokes every free input, then `observe` peeks. */
-  def runRandom[T <: Module](gen: => T, seed: Long, cycles: Int)(drive: (T, Random) => Unit)(observe: T => Unit = (_: T) => ()): Unit = {
+  /** `cycles` cycles of `gen` from `seed`: each cycle `drive` pokes every free input, then `observe` peeks.
+    * `annos`: the simulator (treadle unless given; Verilator for harnesses with arithmetic pipes). */
+  def runRandom[T <: Module](gen: => T, seed: Long, cycles: Int, annos: firrtl2.AnnotationSeq = Seq())(drive: (T, Random) => Unit)(
+      observe: T => Unit = (_: T) => ()): Unit = {
     val rnd = new Random(seed)
-    test(gen) { d =>
+    test(gen).withAnnotations(annos) { d =>
       for (_ <- 0 until cycles) { drive(d, rnd); observe(d); d.clock.step() }
     }
   }

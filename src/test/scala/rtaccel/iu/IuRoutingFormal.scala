@@ -60,6 +60,7 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
     val tmax = Input(UInt(32.W))
     val mem = Input(new MemFree(beatBits))
     val bugFire = Input(Bool())
+    val answered = Output(Bool()) // a request answered (the randomized run's coverage)
   })
   val dut = Module(new IntersectionUnit(p, beatBits, p.tus))
   val now = FormalEnv.cycle(6)
@@ -98,6 +99,8 @@ class IuRoutingFormal(bounds: EnvBounds, answerBound: Int, bug: IuBug = IuBug.No
       when(io.bugFire && again) { box.valid := true.B; box.bits := bits }
     case IuBug.Starve => when(boxSeen) { box.valid := false.B }
   }
+
+  io.answered := box.valid || (tri.valid && tri.bits.last)
 
   // ---- order of the requests taken, per kind (each TU has at most one outstanding: depth tus)
   val nodeOrder = Module(new Queue(UInt(p.tuBits.W), tus))
