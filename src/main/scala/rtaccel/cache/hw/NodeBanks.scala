@@ -60,11 +60,11 @@ class NodeBanks(p: PlatformParams, axiP: AxiParams) extends Module {
   }
 }
 
-/** The crossbar of NodeBanks between n clusters and k banks (its own module so that the routing can be proved on
-  * abstract banks: docs/formal.md). Requests: bank b takes, round robin, one request per cycle from the clusters
-  * whose head request's reference has b in its low `bankBits` bits, with the cluster's number put above the
-  * `innerBits` tag. Answers: each bank's beats go to the cluster named in their tag, whole answers at a time
-  * (round robin among the banks with an answer for that cluster), with the inner tag only.
+/** The crossbar of NodeBanks between n clusters and k banks (its own module so that the routing can be checked on
+  * abstract banks: BankCrossbarSimSpec, docs/formal.md). Requests: bank b takes, round robin, one request per cycle
+  * from the clusters whose head request's reference has b in its low `bankBits` bits, with the cluster's number
+  * put above the `innerBits` tag. Answers: each bank's beats go to the cluster named in their tag, whole answers at
+  * a time (round robin among the banks with an answer for that cluster), with the inner tag only.
   */
 class BankCrossbar(n: Int, k: Int, innerBits: Int, bankBits: Int, dataBits: Int) extends Module {
   require(n >= 1 && k >= 1 && innerBits >= 1 && (1 << bankBits) == k, s"BankCrossbar: $n clusters, $k banks, $bankBits bank bits")
@@ -95,7 +95,6 @@ class BankCrossbar(n: Int, k: Int, innerBits: Int, bankBits: Int, dataBits: Int)
 
   // ---- answers: banks -> clusters, a whole answer at a time
   private def clusterOf(t: UInt): UInt = if (n == 1) 0.U else t(innerBits + clusterBits - 1, innerBits)
-  private val answers = io.bankResp
   private val takes = for ((out, c) <- io.resp.zipWithIndex) yield {
     val arb = Module(new RRArbiter(beat, k))
     // busy: an answer of bank `cur` has begun; only its beats may follow until its last
@@ -103,7 +102,7 @@ class BankCrossbar(n: Int, k: Int, innerBits: Int, bankBits: Int, dataBits: Int)
     // open(b): bank b may give this cluster a beat now. The arbiter's ready alone may be high for an input it holds
     // invalid, so a bank's ready takes the same condition (else a masked bank's beat would leave unseen)
     def open(b: Int): Bool = !busy || cur === b.U
-    for ((a, b) <- answers.zipWithIndex) {
+    for ((a, b) <- io.bankResp.zipWithIndex) {
       arb.io.in(b).valid := a.valid && clusterOf(a.bits.tag.get) === c.U && open(b)
       arb.io.in(b).bits.data := a.bits.data
       arb.io.in(b).bits.last := a.bits.last
@@ -114,5 +113,5 @@ class BankCrossbar(n: Int, k: Int, innerBits: Int, bankBits: Int, dataBits: Int)
     when(out.fire) { busy := !out.bits.last; cur := arb.io.chosen }
     arb.io.in.zipWithIndex.map { case (in, b) => in.ready && open(b) }
   }
-  for ((a, b) <- answers.zipWithIndex) a.ready := VecInit(takes.map(_(b)))(clusterOf(a.bits.tag.get))
+  for ((a, b) <- io.bankResp.zipWithIndex) a.ready := VecInit(takes.map(_(b)))(clusterOf(a.bits.tag.get))
 }
