@@ -25,7 +25,7 @@ RUN_NODE_CACHE ?= 8192
 PLATFORM_KNOBS = $(if $(M),--m $(M)) $(if $(MPPL),--mppl $(MPPL)) $(if $(TUS),--tus $(TUS)) $(if $(IUS),--ius $(IUS)) $(if $(MEM_CHANNELS),--mem-channels $(MEM_CHANNELS)) $(if $(RESP_ORDER),--resp-order $(RESP_ORDER)) $(if $(RAY_STORE),--ray-store $(RAY_STORE)) $(if $(TAG_FORWARD),--tag-forward $(TAG_FORWARD)) $(if $(NODE_BANKS),--node-banks $(NODE_BANKS)) \
   $(if $(STACK),--stack-depth $(STACK)) $(if $(SHORT_STACK),--short-stack $(SHORT_STACK)) $(if $(BOX_FORMAT),--box-format $(BOX_FORMAT)) \
   $(if $(TRI_TEST),--tri-test $(TRI_TEST)) $(if $(TRI_FORMAT),--tri-format $(TRI_FORMAT)) $(if $(NODE_FORMAT),--node-format $(NODE_FORMAT)) $(if $(PRIM_FORMAT),--prim-format $(PRIM_FORMAT)) $(if $(BOARD),--board $(BOARD)) $(if $(MEM_GBPS),--mem-gbps $(MEM_GBPS)) \
-  $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ)) $(CACHE_FLAGS)
+  $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ)) $(if $(PIPELINE),--pipeline $(PIPELINE)) $(CACHE_FLAGS)
 MODEL_ARGS = --config $(CONFIG) $(PLATFORM_KNOBS)
 TRIS       = $$(tools/tris $(SCENE))
 
@@ -194,10 +194,12 @@ cost-model: deps yosys
 max-tus: deps yosys
 	@$(JAVA) rtaccel.cli.MaxTus --config $(VCONFIG) $(PLATFORM_KNOBS) $(if $(CONFIRM),--confirm $(CONFIRM)) $(if $(OUT),--out $(OUT))
 
-# Each fp32 operation of src/main/scala/rtaccel/fp alone between flip-flops for BOARD's family (docs/area.md):
-# table on stderr, JSON last line; cached like make area.
+# Each fp32 operation of src/main/scala/rtaccel/fp alone between flip-flops for BOARD's family (docs/area.md), at its
+# fixed depth and at the depth PIPELINE (default auto) gives at CLOCK_MHZ (default the board's): table on stderr,
+# JSON last line; cached like make area.
 area-fp: deps yosys
-	@$(JAVA) rtaccel.cli.AreaFp $(if $(BOARD),--board $(BOARD)) $(if $(OPS),--ops $(OPS)) $(if $(OUT),--out $(OUT))
+	@$(JAVA) rtaccel.cli.AreaFp $(if $(BOARD),--board $(BOARD)) $(if $(OPS),--ops $(OPS)) $(if $(OUT),--out $(OUT)) \
+	  $(if $(PIPELINE),--pipeline $(PIPELINE)) $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ))
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.
 LINT_WAIVERS = tools/lint.vlt

@@ -6,6 +6,8 @@ import rtaccel.io.InputError
 /** The levels -> MHz rule of one family (boards/timing.json): a proxy with no placement, routing or retiming. */
 final case class FamilyTiming(family: String, levelNs: Double, overheadNs: Double, capMhz: Double, source: String) {
   def fmaxMhz(levels: Int): Double = math.min(capMhz, 1000.0 / (overheadNs + levels * levelNs))
+  /** The most LUT levels a path may have at `mhz` by this rule (at least 1): what PIPELINE=auto budgets. */
+  def levelsFor(mhz: Double): Int = math.max(1, math.floor((1000.0 / mhz - overheadNs) / levelNs + 1e-9).toInt)
   def rule: String = f"1000 / ($overheadNs%.2f + levels x $levelNs%.2f) ns, at most $capMhz%.0f MHz ($source)"
 }
 

@@ -39,7 +39,7 @@ object Area {
   }
 
   private def header(p: rtaccel.config.PlatformParams, b: Board, fidelity: String, top: String) = ujson.Obj(
-    "config" -> p.name, "numerics" -> Numerics.json(p), "board" -> b.name, "family" -> b.family, "fidelity" -> fidelity, "top" -> top)
+    "config" -> p.name, "numerics" -> Numerics.json(p), "pipeline" -> rtaccel.config.Pipelining.json(p), "board" -> b.name, "family" -> b.family, "fidelity" -> fidelity, "top" -> top)
 
   /** A real synthesis (cached per circuit), every module of the hierarchy in `units`. */
   private def yosysJson(a: Args, p: rtaccel.config.PlatformParams, board: Board, out: java.nio.file.Path): ujson.Obj = {

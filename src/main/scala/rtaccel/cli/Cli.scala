@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import java.nio.file.{Path, Paths}
-import rtaccel.config.{BoxRange, CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Presets, RespOrder, TriTest}
+import rtaccel.config.{BoxRange, CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Pipelining, Presets, RespOrder, TriTest}
 import rtaccel.bvh.Mbvh
 import rtaccel.io.{InputError, Npy}
 import rtaccel.scene.{Normalize, Rays, Scene}
@@ -43,7 +43,8 @@ object Cli {
     val gbps = a.opt("mem-gbps").map(_ => a.double("mem-gbps", 0)).orElse(board.map(_.dramGbps))
     val mhz = a.opt("clock-mhz").map(_ => a.double("clock-mhz", 0)).orElse(board.map(_.clockMhz))
     val base = preset.copy(memory = gbps.fold(preset.memory)(g => preset.memory.copy(bytesPerSecond = g * 1e9)),
-      clockMhz = mhz.getOrElse(preset.clockMhz))
+      clockMhz = mhz.getOrElse(preset.clockMhz), family = board.map(_.family).getOrElse(preset.family),
+      pipelining = a.opt("pipeline").map(Pipelining.parse).getOrElse(preset.pipelining))
     val respOrder = a.opt("resp-order").map(RespOrder.parse)
     base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus), ius = a.int("ius", base.ius), memChannels = a.int("mem-channels", base.memChannels),
       respByPath = respOrder.fold(base.respByPath)(_ != RespOrder.Request),

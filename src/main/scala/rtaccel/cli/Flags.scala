@@ -34,6 +34,7 @@ object Flags {
     f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"),
     f("board", "board of boards/catalog.json (BOARD=): its memory bandwidth and clock unless MEM_GBPS / CLOCK_MHZ are given"),
     f("mem-gbps", "peak memory bandwidth in GB/s (MEM_GBPS=)"), f("clock-mhz", "platform clock in MHz (CLOCK_MHZ=)"),
+    f("pipeline", "register placement of the datapaths: auto (the LUT-level budget of the target clock on the board's family) | none (the fixed stages) | <levels> (PIPELINE=)"),
     f("catalog", "board catalog file (default boards/catalog.json)"))
   val cache: Seq[Flag] = Seq(
     f("node-cache", "node cache entries (0 = none)"), f("node-ways", "node cache ways"),
@@ -66,7 +67,7 @@ object Flags {
   val costFit: Seq[Flag] = Seq(f("calibration", "calibration plan (boards/cost-calibration.json)"), f("out", "fitted model file"),
     f("cache", "synthesis cache folder"), f("catalog", "board catalog file"), f("cached-only", "1: fit from the cached syntheses only, leaving out the others"))
   val maxTus: Seq[Flag] = area ++ Seq(f("confirm", "1 (default) confirms the answer with one real synthesis"), f("max", "largest TU count tried"))
-  val areaFp: Seq[Flag] = model.filter(fl => fl.name == "board" || fl.name == "catalog") ++ Seq(
+  val areaFp: Seq[Flag] = model.filter(fl => Set("board", "catalog", "pipeline", "clock-mhz")(fl.name)) ++ Seq(
     f("ops", "fp32 operations to synthesize, comma-separated (OPS=; default all)"), f("out", "output folder"),
     f("cache", "synthesis cache folder"))
 

@@ -131,7 +131,12 @@ final case class PlatformParams(
   // NODE_BANKS=k (k >= 1): one node cache of nodeCache.entries serves every IU, in k banks chosen by the low bits of
   // the node id, each bank a tag pipeline and data RAM of entries / k lines behind a crossbar; 0: each IU cluster has
   // a node cache of its own of nodeCache.entries (docs/caches.md, "Shared node cache")
-  nodeBanks: Int = 0
+  nodeBanks: Int = 0,
+  // PIPELINE: LUT levels allowed between two registers of the datapaths (fp operators, IU pipes, the TC's ray
+  // preparation): auto = what clockMhz leaves on `family` (docs/timing.md); none = the fixed stages
+  pipelining: Pipelining = Pipelining.Auto,
+  // the FPGA family the pipelining budget is reckoned for: BOARD='s, else the paper's Virtex-5
+  family: String = "xc5v"
 ) {
   require(!respTagged || respByPath, "RESP_ORDER=tagged answers on the two path streams; set respByPath with respTagged")
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
@@ -236,6 +241,10 @@ final case class PlatformParams(
   /** the memory controllers, each with an access order of its own (simulation logs one per MC): one per IU
     * cluster, then one per node bank */
   val memControllers: Int = ius + nodeBanks
+  /** PIPELINE's budget: LUT levels at most between two registers of a datapath (None: the fixed stages). */
+  lazy val stageBudget: Option[Int] = pipelining.budget(family, clockMhz)
+  /** A register placer for one module's datapath at this budget (each module takes its own). */
+  def pipe: rtaccel.fp.Stager = new rtaccel.fp.Stager(stageBudget)
   val cyclesPerSecond: Double = clockMhz * 1e6
   /** Sustained DRAM bytes per cycle of ONE channel: MEM_GBPS is per channel, since each of the MEM_CHANNELS is an
     * AXI4 master with a DRAM of its own, and the simulator models each channel alone (sim.DramModel at this rate).

@@ -72,61 +72,137 @@ object Fp {
   private def packZero(f: FpFormat, sign: Bool): UInt = Cat(sign, 0.U((f.width - 1).W))
   private def nan(f: FpFormat): UInt = f.canonicalNaN.U(f.width.W)
 
-  /** Normalise, round to nearest even and pack a finite nonzero value
-    *   (-1)^sign * (sig / 2^(n-1)) * 2^(exp - bias)   (+ a positive amount below sig's LSB if stickyIn)
-    * where n = sig width. `sig` need not be normalised; `exp` is a signed biased exponent that may lie
-    * outside the representable range (underflow goes to subnormals/zero, overflow to inf).
-    * Hardware trimming for callers that know their range: `canUnderflow = false` promises exp >= 1 (drops the
-    * right shifter), `maxLeftShift` bounds sig's leading zeros that need normalising (narrower shifter/LZC).
+  /** A special result (NaN, ±inf, ±0) as class flags and a sign; `nan` wins over `inf` over `zero`. */
+  class Special extends Bundle {
+    val nan = Bool()
+    val inf = Bool()
+    val zero = Bool()
+    val sign = Bool()
+  }
+  private[fp] def special(nanV: Bool, infV: Bool, zeroV: Bool, signV: Bool): Special = {
+    val s = Wire(new Special); s.nan := nanV; s.inf := infV; s.zero := zeroV; s.sign := signV; s
+  }
+  private val noSpecial: () => Special = () => special(false.B, false.B, false.B, false.B)
+
+  /** What [[roundPack]] takes: a finite nonzero value
+    *   (-1)^sign * (sig / 2^(n-1)) * 2^(exp - bias)   (+ a positive amount below sig's LSB if sticky)
+    * where n = sig width, or `sp` when the result is special. `toPos` is the direction of a directed rounding.
     */
-  private[fp] def roundPack(f: FpFormat, sign: Bool, exp: SInt, sigIn: UInt, stickyIn: Bool,
-                            canUnderflow: Boolean = true, maxLeftShift: Int = Int.MaxValue, toPos: Option[Bool] = None): UInt = {
+  class RoundIn(val n: Int, val ew: Int) extends Bundle {
+    val sign = Bool()
+    val exp = SInt(ew.W)
+    val sig = UInt(n.W)
+    val sticky = Bool()
+    val toPos = Bool()
+    val sp = new Special
+  }
+  private[fp] def roundIn(sign: Bool, exp: SInt, sig: UInt, sticky: Bool, toPos: Option[Bool], sp: Special): RoundIn = {
+    val r = Wire(new RoundIn(sig.getWidth, exp.getWidth))
+    r.sign := sign; r.exp := exp; r.sig := sig; r.sticky := sticky; r.toPos := toPos.getOrElse(false.B); r.sp := sp
+    r
+  }
+
+  /** roundPack after its shift amounts are known. */
+  class NormMid(val n: Int, val w: Int, val slW: Int, val rW: Int) extends Bundle {
+    val sign = Bool()
+    val ex = SInt(w.W)
+    val sig = UInt(n.W)
+    val sl = UInt(slW.W)
+    val rSat = UInt(rW.W)
+    val leftCase = Bool()
+    val sticky = Bool()
+    val toPos = Bool()
+    val sp = new Special
+  }
+  /** roundPack after normalising: s has its hidden bit on top unless eOut == 1 (subnormal). */
+  class Norm(val n: Int, val w: Int) extends Bundle {
+    val sign = Bool()
+    val eOut = SInt(w.W)
+    val s = UInt(n.W)
+    val sticky = Bool()
+    val toPos = Bool()
+    val sp = new Special
+  }
+
+  /** Normalise, round (to nearest even, or directed by `toPos` when `directed`) and pack a [[RoundIn]] into fo,
+    * in three segments (shift amounts; shifts; rounding and packing) between which `pipe` may place registers.
+    * `exp` is a signed biased exponent that may lie outside the representable range (underflow goes to
+    * subnormals/zero, overflow to inf). Hardware trimming for callers that know their range: `canUnderflow = false`
+    * promises exp >= 1 (drops the right shifter), `maxLeftShift` bounds sig's leading zeros that need normalising
+    * (narrower shifter/LZC).
+    */
+  private[fp] def roundPackT(pipe: Stager, f: FpFormat, x: Timed[RoundIn], canUnderflow: Boolean = true,
+                             maxLeftShift: Int = Int.MaxValue, directed: Boolean = false): Timed[UInt] = {
     val m = f.manBits
     val e = f.expBits
-    val n0 = sigIn.getWidth
+    val n0 = x.v.n
     val n = n0 max (m + 3)
-    val sig = if (n > n0) Cat(sigIn, 0.U((n - n0).W)) else sigIn
-    val w = exp.getWidth max (log2Ceil(n + 2) + 2)
-    val ex = exp.pad(w)
-
-    // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
-    val leftCase = if (canUnderflow) ex >= 1.S else true.B
+    val w = x.v.ew max (log2Ceil(n + 2) + 2)
     val maxLs = maxLeftShift min (n - 1)
-    // leading zeros of sig (sig != 0), saturated at maxLs via a sentinel bit
-    val lz = if (maxLs >= n - 1) lzc(sig) else lzc(Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
-    val room = ex - 1.S
-    val roomSat = Mux(room > n.S, n.U, room.asUInt(log2Ceil(n + 1) - 1, 0))
-    val sl = Mux(lz < roomSat, lz, roomSat)
-    val shl = shlTrunc(sig, sl)
-    // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
-    val rAmt = 1.S - ex
-    val rSat = Mux(rAmt > (n + 1).S, (n + 1).U, rAmt.asUInt(log2Ceil(n + 2) - 1, 0))
-    val wideR = Cat(sig, 0.U((n + 1).W)) >> rSat
-    val shr = wideR(2 * n, n + 1)
-    val lostR = wideR(n, 0).orR
-
-    val s = if (canUnderflow) Mux(leftCase, shl, shr) else shl
-    val eOut = Mux(leftCase, ex - sl.zext, 1.S) // >= 1; with s's MSB clear only when eOut == 1 (subnormal)
-    val kept = s(n - 1, n - 1 - m) // m+1 bits, hidden bit on top
-    val guard = s(n - 2 - m)
-    val low = if (n - 3 - m >= 0) s(n - 3 - m, 0).orR else false.B
-    val sticky = stickyIn || (if (canUnderflow) !leftCase && lostR else false.B) || low
-    // nearest even, or (directed) away from zero exactly when the direction points away from zero
-    val awayDir = toPos.map(_ =/= sign)
-    val up = awayDir.fold(guard && (sticky || kept(0)))(a => a && (guard || sticky))
-    val rounded = kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
-
-    // Packing trick: ((eOut-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
-    // (hidden bit 0, eOut = 1) packs with exponent field 0, and a rounding carry bumps the exponent.
-    val eM1 = eOut - 1.S
-    val bigExp = eM1 >= f.maxExp.S
-    val eLow = eM1.asUInt(e - 1, 0)
-    val sum = Cat(eLow, 0.U(m.W)) +& rounded
-    val ovf = bigExp || sum >= (BigInt(f.maxExp) << m).U
-    // an overflow rounded toward zero stays at the largest finite value
-    val ovfValue = awayDir.fold(packInf(f, sign))(a => Mux(a, packInf(f, sign), Cat(sign, (f.maxExp - 1).U(e.W), Fill(m, 1.U(1.W)))))
-    Mux(ovf, ovfValue, Cat(sign, sum(e + m - 1, 0)))
+    val lzLevels = Depth.lzc(if (maxLs >= n - 1) n else maxLs + 1)
+    // 1: leading zeros, the room left above exponent 1, and the right shift into the subnormal range
+    val mid = pipe.step(x, lzLevels + Depth.carry(w) + 1) { r =>
+      val sig = if (n > n0) Cat(r.sig, 0.U((n - n0).W)) else r.sig
+      val ex = r.exp.pad(w)
+      // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
+      val leftCase = if (canUnderflow) ex >= 1.S else true.B
+      // leading zeros of sig (sig != 0), saturated at maxLs via a sentinel bit
+      val lz = if (maxLs >= n - 1) lzc(sig) else lzc(Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
+      val room = ex - 1.S
+      val roomSat = Mux(room > n.S, n.U, room.asUInt(log2Ceil(n + 1) - 1, 0))
+      val sl = Mux(lz < roomSat, lz, roomSat)
+      // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
+      val rAmt = 1.S - ex
+      val rSat = Mux(rAmt > (n + 1).S, (n + 1).U, rAmt.asUInt(log2Ceil(n + 2) - 1, 0))
+      val o = Wire(new NormMid(n, w, sl.getWidth, rSat.getWidth))
+      o.sign := r.sign; o.ex := ex; o.sig := sig; o.sl := sl; o.rSat := rSat; o.leftCase := leftCase
+      o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
+      o
+    }
+    // 2: the shifts
+    val norm = pipe.step(mid, Depth.shift(n) + (if (canUnderflow) 1 else 0)) { r =>
+      val shl = shlTrunc(r.sig, r.sl)
+      val o = Wire(new Norm(n, w))
+      if (canUnderflow) {
+        val wideR = Cat(r.sig, 0.U((n + 1).W)) >> r.rSat
+        o.s := Mux(r.leftCase, shl, wideR(2 * n, n + 1))
+        o.sticky := r.sticky || (!r.leftCase && wideR(n, 0).orR)
+      } else { o.s := shl; o.sticky := r.sticky }
+      o.eOut := Mux(r.leftCase, r.ex - r.sl.zext, 1.S) // >= 1; with s's MSB clear only when eOut == 1 (subnormal)
+      o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp
+      o
+    }
+    // 3: round and pack
+    pipe.step(norm, Depth.reduce(n - m) + Depth.carry(m + e) + 2) { r =>
+      val s = r.s
+      val sign = r.sign
+      val kept = s(n - 1, n - 1 - m) // m+1 bits, hidden bit on top
+      val guard = s(n - 2 - m)
+      val low = if (n - 3 - m >= 0) s(n - 3 - m, 0).orR else false.B
+      val sticky = r.sticky || low
+      // nearest even, or (directed) away from zero exactly when the direction points away from zero
+      val awayDir = if (directed) Some(r.toPos =/= sign) else None
+      val up = awayDir.fold(guard && (sticky || kept(0)))(a => a && (guard || sticky))
+      val rounded = kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
+      // Packing trick: ((eOut-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
+      // (hidden bit 0, eOut = 1) packs with exponent field 0, and a rounding carry bumps the exponent.
+      val eM1 = r.eOut - 1.S
+      val bigExp = eM1 >= f.maxExp.S
+      val eLow = eM1.asUInt(e - 1, 0)
+      val sum = Cat(eLow, 0.U(m.W)) +& rounded
+      val ovf = bigExp || sum >= (BigInt(f.maxExp) << m).U
+      // an overflow rounded toward zero stays at the largest finite value
+      val ovfValue = awayDir.fold(packInf(f, sign))(a => Mux(a, packInf(f, sign), Cat(sign, (f.maxExp - 1).U(e.W), Fill(m, 1.U(1.W)))))
+      val finite = Mux(ovf, ovfValue, Cat(sign, sum(e + m - 1, 0)))
+      Mux(r.sp.nan, nan(f), Mux(r.sp.inf, packInf(f, r.sp.sign), Mux(r.sp.zero, packZero(f, r.sp.sign), finite)))
+    }
   }
+
+  /** The combinational roundPack of a finite nonzero value (no special case). */
+  private[fp] def roundPack(f: FpFormat, sign: Bool, exp: SInt, sigIn: UInt, stickyIn: Bool,
+                            canUnderflow: Boolean = true, maxLeftShift: Int = Int.MaxValue, toPos: Option[Bool] = None): UInt =
+    roundPackT(Stager.none, f, Timed(roundIn(sign, exp, sigIn, stickyIn, toPos, noSpecial()), 0, 0),
+      canUnderflow, maxLeftShift, toPos.isDefined).v
 
   /** q * 2^e in format f (q unsigned, e two's complement), +0 for q = 0 and +inf past the largest finite value.
     * Exact otherwise: q fits the significand and every e of its width keeps q * 2^e on f's subnormal grid
@@ -146,51 +222,91 @@ object Fp {
   // ---------------------------------------------------------------------------------------------------------
   // add / sub
 
-  /** a ± b of format `f`, rounded to `fo` (nearest, or directed by `toPos`). The sum is formed at f's width
+  /** addCore after ordering the operands by magnitude. */
+  class AddSwap(f: FpFormat) extends Bundle {
+    val xSign = Bool()
+    val xExp = UInt(f.expBits.W)
+    val yExp = UInt(f.expBits.W)
+    val xSig = UInt((f.manBits + 1).W)
+    val ySig = UInt((f.manBits + 1).W)
+    val effSub = Bool()
+    val toPos = Bool()
+    val sp = new Special // nan and inf; `zero` is decided by the sum, `sign` is the sign of an infinity
+    val zeroSign = Bool()
+  }
+  /** addCore after aligning y: both with three extra bits (guard, round, sticky) and a carry bit on top. */
+  class AddAligned(f: FpFormat) extends Bundle {
+    val xSign = Bool()
+    val xExp = UInt(f.expBits.W)
+    val xExt = UInt((f.manBits + 5).W)
+    val yExt = UInt((f.manBits + 5).W)
+    val effSub = Bool()
+    val toPos = Bool()
+    val sp = new Special
+    val zeroSign = Bool()
+  }
+
+  /** a ± b of format `f`, rounded to `fo` (nearest, or directed by `toPos`), in segments (order the operands,
+    * align, add, then roundPack's three) between which `pipe` may place registers. The sum is formed at f's width
     * with guard/round/sticky bits, so rounding it to a narrower fo is still the correct rounding of the exact sum.
     */
-  private def addCore(f: FpFormat, a: UInt, b: UInt, negB: Boolean, fo: FpFormat, toPos: Option[Bool]): UInt = {
+  private def addCore(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt], negB: Boolean, fo: FpFormat,
+                      toPos: Option[Timed[Bool]]): Timed[UInt] = {
     val m = f.manBits
-    val ua = new Unpacked(f, a)
-    val ub = new Unpacked(f, b)
-    val sA = ua.sign
-    val sB = if (negB) !ub.sign else ub.sign
-
-    // Order by magnitude: x is the larger operand, y the smaller.
-    val swap = ub.mag > ua.mag
-    val xSign = Mux(swap, sB, sA)
-    val xExp = Mux(swap, ub.exp, ua.exp)
-    val ySig = Mux(swap, ua.sig, ub.sig)
-    val yExp = Mux(swap, ua.exp, ub.exp)
-    val xSig = Mux(swap, ub.sig, ua.sig)
-
-    // Align y with three extra bits (guard, round, sticky); shifted-out bits are ORed into the LSB.
     val g = 3
-    val d = xExp - yExp
     val dMax = m + g + 2
-    val dSat = Mux(d > dMax.U, dMax.U, d)
-    val yWide = Cat(ySig, 0.U((g + dMax).W)) >> dSat
-    val yAligned = yWide(m + g + dMax, dMax)
-    val yLost = yWide(dMax - 1, 0).orR
-    val yExt = Cat(0.U(1.W), yAligned | yLost)
-    val xExt = Cat(0.U(1.W), xSig, 0.U(g.W))
-
-    val effSub = sA =/= sB
-    val res = Mux(effSub, xExt - yExt, xExt + yExt) // m+5 bits, top bit = carry position
+    val ins = Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt))
+    // 1: order by magnitude: x is the larger operand, y the smaller
+    val sw = pipe.op(ins, Depth.carry(f.width - 1) + 1) { v =>
+      val ua = new Unpacked(f, v(0))
+      val ub = new Unpacked(f, v(1))
+      val sA = ua.sign
+      val sB = if (negB) !ub.sign else ub.sign
+      val swap = ub.mag > ua.mag
+      val o = Wire(new AddSwap(f))
+      o.xSign := Mux(swap, sB, sA)
+      o.xExp := Mux(swap, ub.exp, ua.exp)
+      o.yExp := Mux(swap, ua.exp, ub.exp)
+      o.xSig := Mux(swap, ub.sig, ua.sig)
+      o.ySig := Mux(swap, ua.sig, ub.sig)
+      o.effSub := sA =/= sB
+      val tp = if (toPos.isDefined) v(2)(0) else false.B
+      o.toPos := tp
+      o.sp := special(ua.isNaN || ub.isNaN || (ua.isInf && ub.isInf && o.effSub), ua.isInf || ub.isInf, false.B, Mux(ua.isInf, sA, sB))
+      // exact zero: -0 only for (-0) + (-0), or (IEEE) a cancellation rounded toward -inf
+      o.zeroSign := (if (toPos.isDefined) Mux(sA === sB, sA, !tp) else sA && sB)
+      o
+    }
+    // 2: align y; shifted-out bits are ORed into the LSB
+    val al = pipe.step(sw, Depth.carry(f.expBits) + Depth.shift(dMax) + 1) { r =>
+      val d = r.xExp - r.yExp
+      val dSat = Mux(d > dMax.U, dMax.U, d)
+      val yWide = Cat(r.ySig, 0.U((g + dMax).W)) >> dSat
+      val yAligned = yWide(m + g + dMax, dMax)
+      val yLost = yWide(dMax - 1, 0).orR
+      val o = Wire(new AddAligned(f))
+      o.xSign := r.xSign; o.xExp := r.xExp; o.effSub := r.effSub; o.toPos := r.toPos; o.sp := r.sp; o.zeroSign := r.zeroSign
+      o.yExt := Cat(0.U(1.W), yAligned | yLost)
+      o.xExt := Cat(0.U(1.W), r.xSig, 0.U(g.W))
+      o
+    }
+    // 3: add
     val ew = expW(f) max expW(fo)
-    val exp = xExp.zext.pad(ew) + (1 - f.bias + fo.bias).S
-    // exp = xExp + 1 >= 2 in f; a narrower exponent range can underflow
-    val rounded = roundPack(fo, xSign, exp, res, false.B, canUnderflow = fo.bias < f.bias, toPos = toPos)
-
-    val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isInf && effSub)
-    val isInf = ua.isInf || ub.isInf
-    val infSign = Mux(ua.isInf, sA, sB)
-    // exact zero: -0 only for (-0) + (-0), or (IEEE) a cancellation rounded toward -inf
-    val zeroSign = toPos.fold(sA && sB)(tp => Mux(sA === sB, sA, !tp))
-    Mux(isNaN, nan(fo),
-      Mux(isInf, packInf(fo, infSign),
-        Mux(res === 0.U, packZero(fo, zeroSign), rounded)))
+    val sum = pipe.step(al, Depth.carry(m + 5) + Depth.reduce(m + 5)) { r =>
+      val res = Mux(r.effSub, r.xExt - r.yExt, r.xExt + r.yExt) // m+5 bits, top bit = carry position
+      // exp = xExp + 1 >= 2 in f; a narrower exponent range can underflow
+      val exp = r.xExp.zext.pad(ew) + (1 - f.bias + fo.bias).S
+      val isZero = res === 0.U
+      roundIn(r.xSign, exp, res, false.B, toPos.map(_ => r.toPos),
+        special(r.sp.nan, r.sp.inf, isZero, Mux(r.sp.inf, r.sp.sign, r.zeroSign)))
+    }
+    roundPackT(pipe, fo, sum, canUnderflow = fo.bias < f.bias, directed = toPos.isDefined)
   }
+
+  private def comb(x: UInt): Timed[UInt] = Timed(x, 0, 0)
+  private def combB(x: Bool): Timed[Bool] = Timed(x, 0, 0)
+  private def addCore(f: FpFormat, a: UInt, b: UInt, negB: Boolean, fo: FpFormat, toPos: Option[Bool]): UInt =
+    addCore(Stager.none, f, comb(a), comb(b), negB, fo, toPos.map(combB)).v
 
   def add(f: FpFormat, a: UInt, b: UInt): UInt = addCore(f, a, b, negB = false, f, None)
   def sub(f: FpFormat, a: UInt, b: UInt): UInt = addCore(f, a, b, negB = true, f, None)
@@ -225,12 +341,17 @@ object Fp {
     Mux(u.isNaN, nan(fo), plain)
   }
 
-  private def convertCore(f: FpFormat, fo: FpFormat, x: UInt, toPos: Option[Bool]): UInt = {
-    val u = new Unpacked(f, x)
+  private def convertCore(pipe: Stager, f: FpFormat, fo: FpFormat, x: Timed[UInt], toPos: Option[Timed[Bool]]): Timed[UInt] = {
     val ew = expW(f) max expW(fo)
-    val rounded = roundPack(fo, u.sign, u.exp.zext.pad(ew) + (fo.bias - f.bias).S, u.sig, false.B, toPos = toPos)
-    Mux(u.isNaN, nan(fo), Mux(u.isInf, packInf(fo, u.sign), Mux(u.isZero, packZero(fo, u.sign), rounded)))
+    val r = pipe.op(Seq(x) ++ toPos.map(t => t.map(0)(_.asUInt)), 2) { v =>
+      val u = new Unpacked(f, v(0))
+      roundIn(u.sign, u.exp.zext.pad(ew) + (fo.bias - f.bias).S, u.sig, false.B, toPos.map(_ => v(1)(0)),
+        special(u.isNaN, u.isInf, u.isZero, u.sign))
+    }
+    roundPackT(pipe, fo, r, directed = toPos.isDefined)
   }
+  private def convertCore(f: FpFormat, fo: FpFormat, x: UInt, toPos: Option[Bool]): UInt =
+    convertCore(Stager.none, f, fo, comb(x), toPos.map(combB)).v
 
   // ---------------------------------------------------------------------------------------------------------
   // mul
@@ -243,19 +364,21 @@ object Fp {
     */
   def mulWide(f: FpFormat, fo: FpFormat, a: UInt, b: UInt): UInt = mulCore(f, a, b, fo, None)
 
-  private def mulCore(f: FpFormat, a: UInt, b: UInt, fo: FpFormat, toPos: Option[Bool]): UInt = {
-    val ua = new Unpacked(f, a)
-    val ub = new Unpacked(f, b)
-    val sign = ua.sign ^ ub.sign
-    val prod = ua.sig * ub.sig // 2m+2 bits, binary point after the top bit pair
+  private def mulCore(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt], fo: FpFormat, toPos: Option[Timed[Bool]]): Timed[UInt] = {
     val ew = expW(f) max expW(fo)
-    val exp = (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
-    val rounded = roundPack(fo, sign, exp, prod, false.B, toPos = toPos)
-    val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
-    Mux(isNaN, nan(fo),
-      Mux(ua.isInf || ub.isInf, packInf(fo, sign),
-        Mux(ua.isZero || ub.isZero, packZero(fo, sign), rounded)))
+    val r = pipe.op(Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt)), Depth.mul(f.manBits + 1)) { v =>
+      val ua = new Unpacked(f, v(0))
+      val ub = new Unpacked(f, v(1))
+      val sign = ua.sign ^ ub.sign
+      val prod = ua.sig * ub.sig // 2m+2 bits, binary point after the top bit pair
+      val exp = (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
+      val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
+      roundIn(sign, exp, prod, false.B, toPos.map(_ => v(2)(0)), special(isNaN, ua.isInf || ub.isInf, ua.isZero || ub.isZero, sign))
+    }
+    roundPackT(pipe, fo, r, directed = toPos.isDefined)
   }
+  private def mulCore(f: FpFormat, a: UInt, b: UInt, fo: FpFormat, toPos: Option[Bool]): UInt =
+    mulCore(Stager.none, f, comb(a), comb(b), fo, toPos.map(combB)).v
 
   // ---------------------------------------------------------------------------------------------------------
   // div: restoring radix-2 digit recurrence, split into pre / step / post so FpDivPipe can register between them
@@ -314,11 +437,16 @@ object Fp {
     s
   }
 
-  def divPost(f: FpFormat, s: DivState): UInt = {
-    // quotient = quo / 2^(m+2) * 2^(exp - bias); quo is m+3 bits with its top bit at position m+2 or m+1
-    // normalised operands: quotient in (1/2, 2), at most one leading zero
-    val rounded = roundPack(f, s.sign, s.exp, s.quo, s.rem =/= 0.U, maxLeftShift = 1)
-    Mux(s.resNaN, nan(f), Mux(s.resInf, packInf(f, s.sign), Mux(s.resZero, packZero(f, s.sign), rounded)))
+  def divPost(f: FpFormat, s: DivState): UInt = divPostT(Stager.none, f, Timed(s, 0, 0)).v
+
+  /** Round and pack the quotient: quo / 2^(m+2) * 2^(exp - bias), quo m+3 bits with its top bit at position m+2
+    * or m+1 (normalised operands: quotient in (1/2, 2), at most one leading zero).
+    */
+  def divPostT(pipe: Stager, f: FpFormat, x: Timed[DivState]): Timed[UInt] = {
+    val r = x.map(Depth.reduce(f.manBits + 2)) { s =>
+      roundIn(s.sign, s.exp, s.quo, s.rem =/= 0.U, None, special(s.resNaN, s.resInf, s.resZero, s.sign))
+    }
+    roundPackT(pipe, f, r, maxLeftShift = 1)
   }
 
   def div(f: FpFormat, a: UInt, b: UInt): UInt = {
@@ -368,4 +496,28 @@ object Fp {
   /** if either NaN -> canonical NaN, else if (a > b) a else b */
   def maxProp(f: FpFormat, a: UInt, b: UInt): UInt =
     Mux(isNaN(f, a) || isNaN(f, b), nan(f), Mux(gt(f, a, b), a, b))
+
+  // ---------------------------------------------------------------------------------------------------------
+  // the same operators on pipeline values (Timed): registers placed inside them by the pipe's budget
+
+  def addT(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt]): Timed[UInt] = addCore(pipe, f, a, b, negB = false, f, None)
+  def subT(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt]): Timed[UInt] = addCore(pipe, f, a, b, negB = true, f, None)
+  def subDirectedT(pipe: Stager, f: FpFormat, fo: FpFormat, a: Timed[UInt], b: Timed[UInt], toPos: Timed[Bool]): Timed[UInt] =
+    addCore(pipe, f, a, b, negB = true, fo, Some(toPos))
+  def mulT(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt]): Timed[UInt] = mulCore(pipe, f, a, b, f, None)
+  def mulDirectedT(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt], toPos: Timed[Bool]): Timed[UInt] =
+    mulCore(pipe, f, a, b, f, Some(toPos))
+  def mulWideT(pipe: Stager, f: FpFormat, fo: FpFormat, a: Timed[UInt], b: Timed[UInt]): Timed[UInt] = mulCore(pipe, f, a, b, fo, None)
+  def convertT(pipe: Stager, f: FpFormat, fo: FpFormat, x: Timed[UInt], toPos: Timed[Bool]): Timed[UInt] =
+    convertCore(pipe, f, fo, x, Some(toPos))
+  def convertNearestT(pipe: Stager, f: FpFormat, fo: FpFormat, x: Timed[UInt]): Timed[UInt] = convertCore(pipe, f, fo, x, None)
+
+  /** A comparison or a selection as one segment: the magnitude compare on the carry chain, the NaN and sign logic
+    * and (for a selection) the multiplexer.
+    */
+  private def cmpLevels(f: FpFormat): Int = Depth.carry(f.width - 1) + 2
+  def cmpT(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt])(fn: (FpFormat, UInt, UInt) => Bool): Timed[Bool] =
+    pipe.op(Seq(a, b), cmpLevels(f))(v => fn(f, v(0), v(1)))
+  def selT(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt])(fn: (FpFormat, UInt, UInt) => UInt): Timed[UInt] =
+    pipe.op(Seq(a, b), cmpLevels(f) + 1)(v => fn(f, v(0), v(1)))
 }

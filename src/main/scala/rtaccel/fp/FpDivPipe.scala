@@ -3,11 +3,14 @@ package rtaccel.fp
 import chisel3._
 import chisel3.util._
 
-/** Fully pipelined divider: accepts one a/b per cycle, result `stages` cycles later (0 = combinational),
-  * bit-identical to [[Fp.div]]. The divider is Fp.divPre, divSteps(f) restoring recurrence steps and
-  * Fp.divPost (round/pack); the `stages` register levels are spread over that chain by estimated delay.
+/** Fully pipelined divider: accepts one a/b per cycle, result `latency` cycles later, bit-identical to [[Fp.div]].
+  * The divider is Fp.divPre, divSteps(f) restoring recurrence steps and Fp.divPost (round/pack).
+  * With a budget (PIPELINE=auto or <levels>), registers go wherever a path would pass `budget` LUT levels and the
+  * result leaves from a register (a consumer in another module starts its own path there); without one, `stages`
+  * register levels are spread over the chain by estimated delay (0 = combinational), the depths of before
+  * pipelining was a parameter.
   */
-class FpDivPipe(val f: FpFormat, val stages: Int) extends Module {
+class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None) extends Module {
   require(stages >= 0, "stages must be >= 0")
   val io = IO(new Bundle {
     val in = Flipped(Valid(new Bundle {
@@ -17,19 +20,28 @@ class FpDivPipe(val f: FpFormat, val stages: Int) extends Module {
     val out = Valid(UInt(f.width.W))
   })
 
-  /** How many register levels follow each unit of the chain (pre, steps..., post). */
-  val regsAfter: Seq[Int] = FpDivPipe.placement(f, stages)
-
-  private def delay[T <: Data](x: T, v: Bool, n: Int): (T, Bool) =
-    (0 until n).foldLeft((x, v)) { case ((d, vv), _) => (RegEnable(d, vv), RegNext(vv, false.B)) }
-
   private val steps = Fp.divSteps(f)
-  var (st, vld) = delay(Fp.divPre(f, io.in.bits.a, io.in.bits.b), io.in.valid, regsAfter(0))
-  for (i <- 1 to steps) {
-    val d = delay(Fp.divStep(f, st), vld, regsAfter(i))
-    st = d._1; vld = d._2
+  private val (res, resValid, lat) = budget match {
+    case Some(_) =>
+      val pipe = new Stager(budget)
+      var st = pipe.step(pipe.in(io.in.bits, FpDivPipe.inputDepth), FpDivPipe.preLevels(f))(x => Fp.divPre(f, x.a, x.b))
+      for (_ <- 1 to steps) st = pipe.step(st, FpDivPipe.stepLevels(f))(s => Fp.divStep(f, s))
+      val out = pipe.reg(Fp.divPostT(pipe, f, st))
+      (out.v, pipe.valid(io.in.valid, out.at), out.at)
+    case None =>
+      val regsAfter = FpDivPipe.placement(f, stages)
+      def delay[T <: Data](x: T, v: Bool, n: Int): (T, Bool) =
+        (0 until n).foldLeft((x, v)) { case ((d, vv), _) => (RegEnable(d, vv), RegNext(vv, false.B)) }
+      var (st, vld) = delay(Fp.divPre(f, io.in.bits.a, io.in.bits.b), io.in.valid, regsAfter(0))
+      for (i <- 1 to steps) {
+        val d = delay(Fp.divStep(f, st), vld, regsAfter(i))
+        st = d._1; vld = d._2
+      }
+      val (r, v) = delay(Fp.divPost(f, st), vld, regsAfter(steps + 1))
+      (r, v, stages)
   }
-  private val (res, resValid) = delay(Fp.divPost(f, st), vld, regsAfter(steps + 1))
+  /** Cycles from an input to its result. */
+  val latency: Int = lat
   io.out.valid := resValid
   io.out.bits := res
 }
@@ -38,6 +50,11 @@ object FpDivPipe {
   /** Relative delay estimates (in recurrence steps) of pre-normalisation and round/pack. */
   private val preWeight = 2.0
   private val postWeight = 4.0
+  /** LUT levels assumed in front of the divider's inputs (a selection in the caller's stage). */
+  val inputDepth: Int = 1
+  private[fp] def preLevels(f: FpFormat): Int = Depth.lzc(f.manBits + 1) + Depth.shift(f.manBits + 1) + 1
+  /** One restoring step: the compare-and-subtract on a carry chain and the selection of the remainder. */
+  private[fp] def stepLevels(f: FpFormat): Int = Depth.carry(f.manBits + 2) + 1
 
   /** Register levels after each of the divSteps(f)+2 chain units; sums to `stages`. Cut j (1..stages) goes
     * after the unit whose cumulative delay is nearest to j/(stages+1) of the total, so the stages are balanced.

@@ -3,7 +3,7 @@ package rtaccel.iu
 import chisel3._
 import chisel3.util._
 import rtaccel.config.PlatformParams
-import rtaccel.fp.{Fp, FpFormat}
+import rtaccel.fp.{Depth, Fp, FpFormat, Timed}
 
 class BoxJob(p: PlatformParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
@@ -13,11 +13,13 @@ class BoxJob(p: PlatformParams) extends Bundle {
   val err = Bool()                     // read with a memory error: the words are not to be trusted
 }
 
-/** M slab tests in parallel, four register levels, one node per cycle, no stalls. The operation order is
-  * that of rtaccel.model.RayBox (docs/numerics.md), so results equal the reference model bit for bit
-  * (with BOX_FORMAT narrower than fp32: model.RayBoxOutward, rounded outward so that no box is lost):
+/** M slab tests in parallel, one node per cycle, no stalls. The operation order is that of rtaccel.model.RayBox
+  * (docs/numerics.md), so results equal the reference model bit for bit (with BOX_FORMAT narrower than fp32:
+  * model.RayBoxOutward, rounded outward so that no box is lost):
   *   1: a = min - o, b = max - o   2: t0 = a*inv, t1 = b*inv   3: lo/hi by NaN-propagating min/max
   *   4: tnear/tfar chains with NaN ignored, hit = tnear <= tfar and the slot is not empty.
+  * Each of the four ends in a register; PIPELINE adds registers inside them (fp.Stager), so the latency is
+  * `latency` (4 with PIPELINE=none).
   */
 class BoxPipe(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
@@ -26,40 +28,45 @@ class BoxPipe(p: PlatformParams) extends Module {
   })
   private val f = FpFormat.fp32
   private val bf = p.boxFormat
-  private def stage[T <: Data](x: T): T = RegNext(x)
-  private val v1 = RegNext(io.in.valid, false.B); private val v2 = RegNext(v1, false.B)
-  private val v3 = RegNext(v2, false.B); private val v4 = RegNext(v3, false.B)
+  private val pipe = p.pipe
+  private def stage[T <: Data](x: Timed[T]): Timed[T] = pipe.reg(x)
+  private def at[T <: Data](x: Timed[T], t: Int): T = pipe.delayTo(x, t).v
 
-  val j1 = stage(io.in.bits)
-  val j2 = stage(j1)
-  val j3 = stage(j2)
+  private val job = pipe.in(io.in.bits, BoxPipe.inputDepth)
+  private def word(k: Int) = job.map(0)(_.words(k))
+  private def o(a: Int) = job.map(0)(_.ray.o(a))
+  private def inv(a: Int) = job.map(0)(_.ray.inv(a))
   // per child: t0 x/y/z of the min planes, then t1 of the max planes (stage 2), as the model's RayBox(Reduced)
-  val (t01, tminB, tmaxB) = if (bf == f) {
-    val ab = stage(VecInit(Seq.tabulate(p.m, 6) { (c, k) => Fp.sub(f, io.in.bits.words(7 * c + k), io.in.bits.ray.o(k % 3)) }.flatten))
-    (stage(VecInit(Seq.tabulate(p.m, 6) { (c, k) => Fp.mul(f, ab(6 * c + k), j1.ray.inv(k % 3)) }.flatten)), j3.ray.tmin, j3.tmax)
+  private val (t01, tminB, tmaxB) = if (bf == f) {
+    val ab = Seq.tabulate(p.m, 6) { (c, k) => stage(Fp.subT(pipe, f, word(7 * c + k), o(k % 3))) }.flatten
+    (ab.zipWithIndex.map { case (x, i) => stage(Fp.mulT(pipe, f, x, inv(i % 3))) }, job.map(0)(_.ray.tmin), job.map(0)(_.tmax))
   } else outward()
 
   /** The conservative slab test in the narrower format (docs/numerics.md): min planes' distances rounded
     * down, max planes' up, 1/d taken at the bound that keeps each product on its side, each product rounded
     * toward its side (down for the entry of its slab, up for the exit), tmin down and tmax up.
     */
-  private def outward(): (Vec[UInt], UInt, UInt) = {
-    val in = io.in.bits
-    val ab = stage(VecInit(Seq.tabulate(p.m, 6) { (c, k) =>
-      Fp.subDirected(f, bf, in.words(7 * c + k), in.ray.o(k % 3), toPos = (k >= 3).B) }.flatten))
-    val invLo = stage(VecInit(Seq.tabulate(3)(a => Fp.convert(f, bf, in.ray.inv(a), false.B))))
-    val invHi = stage(VecInit(Seq.tabulate(3)(a => Fp.convert(f, bf, in.ray.inv(a), true.B))))
-    val tmin1 = stage(Fp.convert(f, bf, in.ray.tmin, false.B)); val tmax1 = stage(Fp.convert(f, bf, in.tmax, true.B))
-    val invNeg1 = stage(VecInit(in.ray.inv.map(_(f.width - 1)))) // only the sign of 1/d is needed past stage 1
-    val t = stage(VecInit(Seq.tabulate(p.m, 6) { (c, k) =>
+  private def outward(): (Seq[Timed[UInt]], Timed[UInt], Timed[UInt]) = {
+    def const(b: Boolean) = Timed(b.B, 0, 0)
+    val ab = Seq.tabulate(p.m, 6) { (c, k) =>
+      stage(Fp.subDirectedT(pipe, f, bf, word(7 * c + k), o(k % 3), const(k >= 3))) }.flatten
+    val invLo = Seq.tabulate(3)(a => stage(Fp.convertT(pipe, f, bf, inv(a), const(false))))
+    val invHi = Seq.tabulate(3)(a => stage(Fp.convertT(pipe, f, bf, inv(a), const(true))))
+    val tmin1 = stage(Fp.convertT(pipe, f, bf, job.map(0)(_.ray.tmin), const(false)))
+    val tmax1 = stage(Fp.convertT(pipe, f, bf, job.map(0)(_.tmax), const(true)))
+    val t = Seq.tabulate(p.m, 6) { (c, k) =>
       val a = k % 3
-      val invNeg = invNeg1(a)
-      val up = if (k < 3) invNeg else !invNeg // a min plane bounds the entry (down) unless 1/d < 0 swaps the planes
       val d = ab(6 * c + k)
-      val useHi = d(bf.width - 1) ^ up
-      Fp.mulDirected(bf, d, Mux(useHi, invHi(a), invLo(a)), up)
-    }.flatten))
-    (t, RegNext(RegNext(tmin1)), RegNext(RegNext(tmax1)))
+      // a min plane bounds the entry (down) unless 1/d < 0 swaps the planes; 1/d taken at the bound that keeps the
+      // product on its side: one selection in front of the multiplier
+      val Seq(lo, hi, dd, iv) = pipe.align(Seq(invLo(a), invHi(a), d, inv(a)))
+      val invNeg = iv.v(f.width - 1)
+      val up = if (k < 3) invNeg else !invNeg
+      val useHi = dd.v(bf.width - 1) ^ up
+      val pick = Timed(Mux(useHi, hi.v, lo.v), dd.at, Seq(lo, hi, dd, iv).map(_.depth).max + 1)
+      stage(Fp.mulDirectedT(pipe, bf, dd, pick, Timed(up, dd.at, iv.depth)))
+    }.flatten
+    (t, tmin1, tmax1)
   }
 
   /** tfar moved p.boxSlackUlps ulps toward +inf on its bits (TRI_TEST=watertight; model.BoxSlack): an adder, not
@@ -73,22 +80,40 @@ class BoxPipe(p: PlatformParams) extends Module {
       Mux(mag > k, Cat(1.U(1.W), mag - k), Cat(0.U(1.W), k - mag))))
   }
 
-  val lohi = stage(VecInit(Seq.tabulate(p.m, 3) { (c, a) =>
+  private val lohi = Seq.tabulate(p.m, 3) { (c, a) =>
     val t0 = t01(6 * c + a); val t1 = t01(6 * c + 3 + a)
-    Seq(Fp.minProp(bf, t0, t1), Fp.maxProp(bf, t0, t1))
-  }.flatten.flatten))
-  io.out.valid := v4
-  val res = Wire(new BoxResult(p))
-  res.tu := j3.tu
-  res.err := j3.err
-  for (c <- 0 until p.m) {
+    Seq(stage(Fp.selT(pipe, bf, t0, t1)(Fp.minProp)), stage(Fp.selT(pipe, bf, t0, t1)(Fp.maxProp)))
+  }.flatten.flatten
+  private val hits = (0 until p.m).map { c =>
     def lo(a: Int) = lohi(6 * c + 2 * a); def hi(a: Int) = lohi(6 * c + 2 * a + 1)
-    val tnear = Fp.maxNum(bf, Fp.maxNum(bf, Fp.maxNum(bf, tminB, lo(0)), lo(1)), lo(2))
-    val tfar = Fp.minNum(bf, Fp.minNum(bf, Fp.minNum(bf, tmaxB, hi(0)), hi(1)), hi(2))
+    def chain(start: Timed[UInt], sel: (FpFormat, UInt, UInt) => UInt, planes: Int => Timed[UInt]) =
+      (0 until 3).foldLeft(start)((acc, a) => Fp.selT(pipe, bf, acc, planes(a))(sel))
+    val tnear = chain(tminB, Fp.maxNum, lo)
+    val tfar = chain(tmaxB, Fp.minNum, hi)
+    val slack = if (p.boxSlackUlps == 0) tfar else pipe.step(tfar, Depth.carry(bf.width) + 2)(slackUp)
+    val le = Fp.cmpT(pipe, bf, tnear, slack)(Fp.le)
     // the TUs rank and cull in fp32: widening is exact
-    res.tnear(c) := (if (bf == f) tnear else Fp.convert(bf, f, tnear, false.B))
-    res.hit(c) := Fp.le(bf, tnear, slackUp(tfar)) && j3.words(7 * c + 6) =/= 0.U && !j3.err
-    res.cref(c) := j3.words(7 * c + 6)
+    val near32 = if (bf == f) tnear else Fp.convertT(pipe, bf, f, tnear, Timed(false.B, 0, 0))
+    (le, near32)
   }
-  io.out.bits := RegNext(res)
+  private val (tDone, dDone) = pipe.join(hits.flatMap { case (l, n) => Seq(l, n) }: _*)
+  private val j = at(job, tDone)
+  val res = Wire(new BoxResult(p))
+  res.tu := j.tu
+  res.err := j.err
+  for (c <- 0 until p.m) {
+    res.tnear(c) := at(hits(c)._2, tDone)
+    res.hit(c) := at(hits(c)._1, tDone) && j.words(7 * c + 6) =/= 0.U && !j.err
+    res.cref(c) := j.words(7 * c + 6)
+  }
+  private val out = stage(Timed(res, tDone, dDone + 1))
+  /** Cycles from a job to its result. */
+  val latency: Int = out.at
+  io.out.bits := out.v
+  io.out.valid := pipe.valid(io.in.valid, latency)
+}
+
+object BoxPipe {
+  /** LUT levels in front of the pipe's inputs in the IU (the collection's beat selection and node decode). */
+  val inputDepth: Int = 2
 }

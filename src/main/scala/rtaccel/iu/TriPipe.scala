@@ -3,7 +3,7 @@ package rtaccel.iu
 import chisel3._
 import chisel3.util._
 import rtaccel.config.PlatformParams
-import rtaccel.fp.{Fp, FpDivPipe, FpFormat}
+import rtaccel.fp.{Depth, Fp, FpDivPipe, FpFormat, Timed}
 
 class TriJob(p: PlatformParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
@@ -21,10 +21,12 @@ class TriJob(p: PlatformParams) extends Bundle {
   *   5: first sums of the four dot products        6: det, u', v', t'
   *   7..: inv = 1/det (pipelined divider)          then u = u'*inv, v = v'*inv, t = t'*inv
   *   last: u+v and the hit conditions.
+  * Each ends in a register; PIPELINE adds registers inside them (fp.Stager), so the latency is `latency`
+  * (8 + divStages with PIPELINE=none).
   * TRI_FORMAT (p.triFormat, fp32 or wider): the fp32 inputs (o, d, vertices, tmin, tmax) are widened exactly where
   * they are used, every operation above rounds in that format (model.RayTriangleWide), the hit conditions compare
   * in it, and t, u, v are rounded to fp32 (nearest even) for the result in the last stage, beside the conditions:
-  * the same stages and latency in every format; with fp32 the widening and rounding are wires.
+  * the same stages in every format; with fp32 the widening and rounding are wires.
   */
 class TriPipe(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
@@ -32,75 +34,75 @@ class TriPipe(p: PlatformParams) extends Module {
     val out = Valid(new TriResult(p))
   })
   private val f = p.triFormat
-  private val one = (BigInt(f.bias) << f.manBits).U(f.width.W)
-  private val zero = 0.U(f.width.W)
-  private def wide(x: UInt) = Fp.widen(FpFormat.fp32, f, x)
-  private def narrow(x: UInt) = if (f == FpFormat.fp32) x else Fp.convertNearest(f, FpFormat.fp32, x)
-  private def sub(a: UInt, b: UInt) = Fp.sub(f, a, b)
-  private def mul(a: UInt, b: UInt) = Fp.mul(f, a, b)
-  private def add(a: UInt, b: UInt) = Fp.add(f, a, b)
+  private val f32 = FpFormat.fp32
+  private val pipe = p.pipe
+  private def stage[T <: Data](x: Timed[T]): Timed[T] = pipe.reg(x)
+  private def lit(x: BigInt) = Timed(x.U(f.width.W), 0, 0)
+  private val one = lit(BigInt(f.bias) << f.manBits)
+  private val zero = lit(0)
+  // widening fp32 into a wider exponent normalises subnormals (a leading-zero count and a shift)
+  private def wide(x: Timed[UInt]) = if (f == f32) x else pipe.step(x, Depth.lzc(24) + Depth.shift(24))(Fp.widen(f32, f, _))
+  private def narrow(x: Timed[UInt]) = if (f == f32) x else Fp.convertNearestT(pipe, f, f32, x)
+  private def sub(a: Timed[UInt], b: Timed[UInt]) = Fp.subT(pipe, f, a, b)
+  private def mul(a: Timed[UInt], b: Timed[UInt]) = Fp.mulT(pipe, f, a, b)
+  private def add(a: Timed[UInt], b: Timed[UInt]) = Fp.addT(pipe, f, a, b)
+  private def cmp(a: Timed[UInt], b: Timed[UInt])(fn: (FpFormat, UInt, UInt) => Bool) = Fp.cmpT(pipe, f, a, b)(fn)
 
-  // stage 1
-  val in = io.in.bits
-  def vtx(v: Int, a: Int) = wide(in.words(3 * v + a))
-  val s1 = RegNext(VecInit((0 until 3).map(a => sub(vtx(1, a), vtx(0, a))) ++ (0 until 3).map(a => sub(vtx(2, a), vtx(0, a))) ++
-    (0 until 3).map(a => sub(wide(in.ray.o(a)), vtx(0, a)))))
-  val j1 = RegNext(in); val v1 = RegNext(io.in.valid, false.B)
-  def e1(a: Int) = s1(a); def e2(a: Int) = s1(3 + a); def s(a: Int) = s1(6 + a)
-  // stage 2: cross products as a.i*b.j - a.j*b.i, products first
-  private def crossProducts(a: Int => UInt, b: Int => UInt) =
-    Seq(mul(a(1), b(2)), mul(a(2), b(1)), mul(a(2), b(0)), mul(a(0), b(2)), mul(a(0), b(1)), mul(a(1), b(0)))
-  val d1 = (k: Int) => wide(j1.ray.d(k))
-  val s2 = RegNext(VecInit(crossProducts(d1, e2) ++ crossProducts(s, e1)))
-  val e2r = RegNext(VecInit((0 until 6).map(s1(_)))) // e1, e2 carried
-  val sr = RegNext(VecInit((0 until 3).map(s(_))))
-  val j2 = RegNext(j1); val v2 = RegNext(v1, false.B)
-  // stage 3
-  val s3 = RegNext(VecInit((0 until 6).map(k => sub(s2(2 * k), s2(2 * k + 1))))) // p xyz, q xyz
-  val e3 = RegNext(e2r); val sr3 = RegNext(sr)
-  val j3 = RegNext(j2); val v3 = RegNext(v2, false.B)
-  def pp(a: Int) = s3(a); def qq(a: Int) = s3(3 + a)
-  // stage 4: products of the four dot products e1.p, s.p, d.q, e2.q
-  val s4 = RegNext(VecInit(
-    (0 until 3).map(a => mul(e3(a), pp(a))) ++ (0 until 3).map(a => mul(sr3(a), pp(a))) ++
-      (0 until 3).map(a => mul(wide(j3.ray.d(a)), qq(a))) ++ (0 until 3).map(a => mul(e3(3 + a), qq(a)))))
-  val j4 = RegNext(j3); val v4 = RegNext(v3, false.B)
-  // stage 5: (p0 + p1)
-  val s5 = RegNext(VecInit((0 until 4).map(k => add(s4(3 * k), s4(3 * k + 1)))))
-  val s5c = RegNext(VecInit((0 until 4).map(k => s4(3 * k + 2))))
-  val j5 = RegNext(j4); val v5 = RegNext(v4, false.B)
-  // stage 6: + p2 -> det, u', v', t'
-  val s6 = RegNext(VecInit((0 until 4).map(k => add(s5(k), s5c(k)))))
-  val j6 = RegNext(j5); val v6 = RegNext(v5, false.B)
-  // divider: inv = 1/det
-  val div = Module(new FpDivPipe(f, p.divStages))
-  div.io.in.valid := v6
-  div.io.in.bits.a := one
-  div.io.in.bits.b := s6(0)
-  val s7 = ShiftRegister(s6, p.divStages); val j7 = ShiftRegister(j6, p.divStages)
-  val v7 = div.io.out.valid
-  val inv = div.io.out.bits
-  // stage 8: u, v, t
-  val det8 = RegNext(s7(0))
-  val uvt = RegNext(VecInit((1 until 4).map(k => mul(s7(k), inv))))
-  val j8 = RegNext(j7); val v8 = RegNext(v7, false.B)
-  // stage 9: conditions
-  val u = uvt(0); val v = uvt(1); val t = uvt(2)
+  private val job = pipe.in(io.in.bits, TriPipe.inputDepth)
+  private def vtx(v: Int, a: Int) = wide(job.map(0)(_.words(3 * v + a)))
+  private def d(a: Int) = wide(job.map(0)(_.ray.d(a)))
+  // 1
+  private val e1 = (0 until 3).map(a => stage(sub(vtx(1, a), vtx(0, a))))
+  private val e2 = (0 until 3).map(a => stage(sub(vtx(2, a), vtx(0, a))))
+  private val s = (0 until 3).map(a => stage(sub(wide(job.map(0)(_.ray.o(a))), vtx(0, a))))
+  // 2, 3: cross products as a.i*b.j - a.j*b.i, products first
+  private def cross(a: Int => Timed[UInt], b: Int => Timed[UInt]) = Seq((1, 2), (2, 0), (0, 1)).map { case (i, j) =>
+    val pr = Seq(stage(mul(a(i), b(j))), stage(mul(a(j), b(i))))
+    stage(sub(pr(0), pr(1)))
+  }
+  private val pv = cross(d, e2)
+  private val qv = cross(s, e1)
+  // 4: products of the four dot products e1.p, s.p, d.q, e2.q; 5, 6: (x0 + x1) + x2
+  private def dot(a: Int => Timed[UInt], b: Int => Timed[UInt]) = {
+    val pr = (0 until 3).map(k => stage(mul(a(k), b(k))))
+    stage(add(stage(add(pr(0), pr(1))), pr(2)))
+  }
+  private val det = dot(e1, pv)
+  private val uvt = Seq(dot(s, pv), dot(d, qv), dot(e2, qv))
+  // 7..: inv = 1/det
+  private val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget))
+  private val detIn = pipe.align(Seq(det, one)) // the divider reads its operands as they come
+  div.io.in.valid := true.B
+  div.io.in.bits.a := detIn(1).v
+  div.io.in.bits.b := detIn(0).v
+  // (registered with a budget; with PIPELINE=none the depth is not counted)
+  private val inv = Timed(div.io.out.bits, detIn(0).at + div.latency, 0)
+  // u, v, t
+  private val Seq(u, v, t) = uvt.map(x => stage(mul(x, inv)))
+  // the conditions
+  private val conds = Seq(Fp.cmpT(pipe, f, det, zero)((g, a, b) => !Fp.eq(g, a, b)), cmp(u, zero)(Fp.ge), cmp(v, zero)(Fp.ge),
+    cmp(add(u, v), one)(Fp.le), cmp(t, wide(job.map(0)(_.ray.tmin)))(Fp.ge), cmp(t, wide(job.map(0)(_.tmax)))(Fp.lt))
+  private val hit = pipe.op(conds.map(_.map(0)(_.asUInt)), 1)(c => c.map(_.asBool).reduce(_ && _))
+  private val tuv = Seq(t, u, v).map(narrow)
+  private val (tDone, dDone) = pipe.join(Seq(hit) ++ tuv: _*)
+  private val j = pipe.delayTo(job, tDone).v
   val res = Wire(new TriResult(p))
-  res.tu := j8.tu
-  res.hit := !Fp.eq(f, det8, zero) && Fp.ge(f, u, zero) && Fp.ge(f, v, zero) && Fp.le(f, add(u, v), one) &&
-    Fp.ge(f, t, wide(j8.ray.tmin)) && Fp.lt(f, t, wide(j8.tmax)) && !j8.err
-  res.t := narrow(t); res.u := narrow(u); res.v := narrow(v)
-  res.prim := j8.words(9)
-  res.last := j8.last
-  res.err := j8.err
-  io.out.bits := RegNext(res)
-  io.out.valid := RegNext(v8, false.B)
+  res.tu := j.tu
+  res.hit := pipe.delayTo(hit, tDone).v && !j.err
+  res.t := pipe.delayTo(tuv(0), tDone).v; res.u := pipe.delayTo(tuv(1), tDone).v; res.v := pipe.delayTo(tuv(2), tDone).v
+  res.prim := j.words(9)
+  res.last := j.last
+  res.err := j.err
+  private val out = stage(Timed(res, tDone, dDone + 1))
+  /** Cycles from a job to its result. */
+  val latency: Int = out.at
+  io.out.bits := out.v
+  io.out.valid := pipe.valid(io.in.valid, latency)
 }
 
 object TriPipe {
   /** Pipelined dividers per triangle pipe (1/det), in either TRI_TEST (the cost model counts them). */
   val dividers: Int = 1
-  /** Cycles from input to output. */
-  def latency(p: PlatformParams): Int = 8 + p.divStages
+  /** LUT levels in front of the pipe's inputs in the IU (the collection's beat selection). */
+  val inputDepth: Int = 2
 }

@@ -3,7 +3,7 @@ package rtaccel.iu
 import chisel3._
 import chisel3.util._
 import rtaccel.config.PlatformParams
-import rtaccel.fp.{Fp, FpDivPipe, FpFormat}
+import rtaccel.fp.{Depth, Fp, FpDivPipe, FpFormat, Timed}
 
 /** The watertight ray-triangle test (TRI_TEST=watertight; Woop, Benthin and Wald, JCGT 2013), one primitive per
   * cycle, no stalls, in the operation order of rtaccel.model.RayTriangleWatertight (docs/numerics.md):
@@ -23,107 +23,95 @@ class WatertightPipe(p: PlatformParams) extends Module {
   })
   private val f = FpFormat.fp32
   private val wide = FpFormat.fp64 // the model's Double: the product of two binary32 values is exact there
-  private val one = "h3f800000".U(32.W)
-  private val zero = 0.U(32.W)
-  private def sub(a: UInt, b: UInt) = Fp.sub(f, a, b)
-  private def mul(a: UInt, b: UInt) = Fp.mul(f, a, b)
-  private def add(a: UInt, b: UInt) = Fp.add(f, a, b)
+  private val pipe = p.pipe
+  private def lit(x: BigInt) = Timed(x.U(32.W), 0, 0)
+  private val one = lit(0x3f800000L)
+  private val zero = lit(0)
+  private def stage[T <: Data](x: Timed[T]): Timed[T] = pipe.reg(x)
+  private def sub(a: Timed[UInt], b: Timed[UInt]) = Fp.subT(pipe, f, a, b)
+  private def mul(a: Timed[UInt], b: Timed[UInt]) = Fp.mulT(pipe, f, a, b)
+  private def add(a: Timed[UInt], b: Timed[UInt]) = Fp.addT(pipe, f, a, b)
+  private def cmp(a: Timed[UInt], b: Timed[UInt])(fn: (FpFormat, UInt, UInt) => Bool) = Fp.cmpT(pipe, f, a, b)(fn)
   private def pick(k: UInt, v: Seq[UInt]): UInt = Mux(k === 0.U, v(0), Mux(k === 1.U, v(1), v(2)))
+  /** One of three values by an axis index, as a segment of two LUT levels. */
+  private def pickT(k: Timed[UInt], v: Seq[Timed[UInt]]): Timed[UInt] = pipe.op(k +: v, 2)(x => pick(x(0), x.tail))
 
-  /** What a primitive's result needs besides the arithmetic, carried down the pipe. */
-  class Meta extends Bundle {
-    val tu = UInt(p.tuBits.W)
-    val tmin = UInt(32.W)
-    val tmax = UInt(32.W)
-    val prim = UInt(32.W)
-    val last = Bool()
-    val err = Bool()
+  private val job = pipe.in(io.in.bits, TriPipe.inputDepth)
+  private def field(fn: TriJob => UInt) = job.map(0)(fn)
+
+  // 1: kz = axis of the largest |d| (ties to the lower axis), kx = kz+1, ky = kx+1 (mod 3)
+  private val axes = pipe.step(job, Depth.carry(31) + 2) { in =>
+    val mag = in.ray.d.map(_(30, 0))
+    val kz = Mux(mag(0) >= mag(1) && mag(0) >= mag(2), 0.U(2.W), Mux(mag(1) >= mag(2), 1.U(2.W), 2.U(2.W)))
+    val kx = Mux(kz === 2.U, 0.U, kz + 1.U)
+    val ky = Mux(kx === 2.U, 0.U, kx + 1.U)
+    VecInit(kx, ky, kz)
   }
-  val in = io.in.bits
-  val meta = Wire(new Meta)
-  meta.tu := in.tu; meta.tmin := in.ray.tmin; meta.tmax := in.tmax; meta.prim := in.words(9)
-  meta.last := in.last; meta.err := in.err
+  private def k(i: Int) = axes.map(0)(_(i))
+  private val dv = (0 until 3).map(a => field(_.ray.d(a)))
+  private val sz0 = pickT(k(2), (0 until 3).map(a => field(_.ray.inv(a))))
+  private val sx = stage(mul(pickT(k(0), dv), sz0))
+  private val sy = stage(mul(pickT(k(1), dv), sz0))
+  private val sz = stage(sz0)
+  private val rel = (0 until 3).map(v => (0 until 3).map(a => stage(sub(field(_.words(3 * v + a)), field(_.ray.o(a))))))
+  private val k1 = (0 until 3).map(i => stage(k(i)))
 
-  // stage 1: kz = axis of the largest |d| (ties to the lower axis), kx = kz+1, ky = kx+1 (mod 3)
-  val mag = in.ray.d.map(_(30, 0))
-  val kz = Mux(mag(0) >= mag(1) && mag(0) >= mag(2), 0.U(2.W), Mux(mag(1) >= mag(2), 1.U(2.W), 2.U(2.W)))
-  val kx = Mux(kz === 2.U, 0.U, kz + 1.U)
-  val ky = Mux(kx === 2.U, 0.U, kx + 1.U)
-  val sz0 = pick(kz, in.ray.inv)
-  val s1 = RegNext(VecInit(Seq(mul(pick(kx, in.ray.d), sz0), mul(pick(ky, in.ray.d), sz0), sz0) ++
-    (0 until 9).map(k => sub(in.words(k), in.ray.o(k % 3)))))
-  val k1 = RegNext(VecInit(kx, ky, kz))
-  val m1 = RegNext(meta); val v1 = RegNext(io.in.valid, false.B)
-  def rel(v: Int): Seq[UInt] = (0 until 3).map(a => s1(3 + 3 * v + a))
+  // 2, 3: the shear products and the sheared x, y, z of each vertex A, B, C
+  private val sheared = (0 until 3).map { v =>
+    val kz = pickT(k1(2), rel(v))
+    Seq(stage(sub(stage(pickT(k1(0), rel(v))), stage(mul(sx, kz)))),
+      stage(sub(stage(pickT(k1(1), rel(v))), stage(mul(sy, kz)))),
+      stage(stage(mul(sz, kz))))
+  }
+  private def x(v: Int) = sheared(v)(0); private def y(v: Int) = sheared(v)(1); private def z(v: Int) = sheared(v)(2)
 
-  // stage 2: the shear products; the x and y of each vertex chosen by kx, ky
-  val s2 = RegNext(VecInit((0 until 3).flatMap { v =>
-    val k = pick(k1(2), rel(v))
-    Seq(pick(k1(0), rel(v)), mul(s1(0), k), pick(k1(1), rel(v)), mul(s1(1), k), mul(s1(2), k))
-  }))
-  val m2 = RegNext(m1); val v2 = RegNext(v1, false.B)
-
-  // stage 3: sheared vertices (x, y, z) of A, B, C
-  val s3 = RegNext(VecInit((0 until 3).flatMap(v => Seq(sub(s2(5 * v), s2(5 * v + 1)), sub(s2(5 * v + 2), s2(5 * v + 3)), s2(5 * v + 4)))))
-  val m3 = RegNext(m2); val v3 = RegNext(v2, false.B)
-  def x(v: Int) = s3(3 * v); def y(v: Int) = s3(3 * v + 1); def z(v: Int) = s3(3 * v + 2)
-
-  // stage 4: U = Cx*By - Cy*Bx, V = Ax*Cy - Ay*Cx, W = Bx*Ay - By*Ax, products in both formats
+  // 4, 5: U = Cx*By - Cy*Bx, V = Ax*Cy - Ay*Cx, W = Bx*Ay - By*Ax, products in both formats
   private val edges = Seq((x(2), y(1), y(2), x(1)), (x(0), y(2), y(0), x(2)), (x(1), y(0), y(1), x(0)))
-  val p32 = RegNext(VecInit(edges.flatMap { case (a, b, c, d) => Seq(mul(a, b), mul(c, d)) }))
-  val p64 = RegNext(VecInit(edges.flatMap { case (a, b, c, d) => Seq(Fp.mulWide(f, wide, a, b), Fp.mulWide(f, wide, c, d)) }))
-  val zs4 = RegNext(VecInit((0 until 3).map(z)))
-  val m4 = RegNext(m3); val v4 = RegNext(v3, false.B)
+  private val e32 = edges.map { case (a, b, c, d) => stage(sub(stage(mul(a, b)), stage(mul(c, d)))) }
+  private val e64 = edges.map { case (a, b, c, d) =>
+    stage(Fp.subT(pipe, wide, stage(Fp.mulWideT(pipe, f, wide, a, b)), stage(Fp.mulWideT(pipe, f, wide, c, d)))) }
 
-  // stage 5: the edge functions
-  val e32 = RegNext(VecInit((0 until 3).map(k => sub(p32(2 * k), p32(2 * k + 1)))))
-  val e64 = RegNext(VecInit((0 until 3).map(k => Fp.sub(wide, p64(2 * k), p64(2 * k + 1)))))
-  val zs5 = RegNext(zs4); val m5 = RegNext(m4); val v5 = RegNext(v4, false.B)
+  // 6: an edge function that is exactly 0 in binary32 takes its exact-sign binary64 value
+  private val e = (0 until 3).map { i =>
+    val isZero = cmp(e32(i), zero)(Fp.eq)
+    val narrowed = Fp.convertNearestT(pipe, wide, f, e64(i))
+    stage(pipe.op(Seq(isZero.map(0)(_.asUInt), narrowed, e32(i)), 1)(v => Mux(v(0)(0), v(1), v(2))))
+  }
 
-  // stage 6: an edge function that is exactly 0 in binary32 takes its exact-sign binary64 value
-  val e = RegNext(VecInit((0 until 3).map(k => Mux(Fp.eq(f, e32(k), zero), Fp.convertNearest(wide, f, e64(k)), e32(k)))))
-  val zs6 = RegNext(zs5); val m6 = RegNext(m5); val v6 = RegNext(v5, false.B)
+  // 7: mixed signs miss; U+V; the products of T.  8: det = (U+V)+W, U*Az + V*Bz
+  private val signs = e.map(x => cmp(x, zero)(Fp.lt)) ++ e.map(x => cmp(x, zero)(Fp.gt))
+  private val mixed = stage(pipe.op(signs.map(_.map(0)(_.asUInt)), 1)(v => v.take(3).reduce(_ | _)(0) && v.drop(3).reduce(_ | _)(0)))
+  private val det = stage(add(stage(add(e(0), e(1))), e(2)))
+  private val tp = (0 until 3).map(i => stage(mul(e(i), z(i))))
+  private val tSum = add(stage(add(tp(0), tp(1))), tp(2))
 
-  // stage 7: mixed signs miss; U+V; the products of T
-  val mixed7 = RegNext(e.map(Fp.lt(f, _, zero)).reduce(_ || _) && e.map(Fp.gt(f, _, zero)).reduce(_ || _))
-  val uv7 = RegNext(add(e(0), e(1)))
-  val tp7 = RegNext(VecInit((0 until 3).map(k => mul(e(k), zs6(k)))))
-  val e7 = RegNext(e); val m7 = RegNext(m6); val v7 = RegNext(v6, false.B)
+  // 1/det (pipelined divider) beside T = (U*Az + V*Bz) + W*Cz
+  private val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget))
+  private val detIn = pipe.align(Seq(det, one))
+  div.io.in.valid := true.B
+  div.io.in.bits.a := detIn(1).v
+  div.io.in.bits.b := detIn(0).v
+  // (registered with a budget; with PIPELINE=none the depth is not counted)
+  private val rcp = Timed(div.io.out.bits, detIn(0).at + div.latency, 0)
 
-  // stage 8: det = (U+V)+W, U*Az + V*Bz
-  val det8 = RegNext(add(uv7, e7(2)))
-  val t8 = RegNext(add(tp7(0), tp7(1)))
-  val wcz8 = RegNext(tp7(2))
-  val mixed8 = RegNext(mixed7); val e8 = RegNext(e7); val m8 = RegNext(m7); val v8 = RegNext(v7, false.B)
-
-  // divider: 1/det, beside T = (U*Az + V*Bz) + W*Cz
-  val div = Module(new FpDivPipe(f, p.divStages))
-  div.io.in.valid := v8
-  div.io.in.bits.a := one
-  div.io.in.bits.b := det8
-  val tD = ShiftRegister(add(t8, wcz8), p.divStages)
-  val detD = ShiftRegister(det8, p.divStages); val vwD = ShiftRegister(VecInit(e8(1), e8(2)), p.divStages)
-  val mixedD = ShiftRegister(mixed8, p.divStages); val mD = ShiftRegister(m8, p.divStages)
-  val vD = div.io.out.valid
-  val rcp = div.io.out.bits
-
-  // t, u, v
-  val tuv = RegNext(VecInit(mul(tD, rcp), mul(vwD(0), rcp), mul(vwD(1), rcp)))
-  val det9 = RegNext(detD); val mixed9 = RegNext(mixedD); val m9 = RegNext(mD); val v9 = RegNext(vD, false.B)
-
-  // the hit
+  // t, u, v and the hit
+  private val Seq(t, u, v) = Seq(tSum, e(1), e(2)).map(x => stage(mul(x, rcp)))
+  private val conds = Seq(Fp.cmpT(pipe, f, det, zero)((g, a, b) => !Fp.eq(g, a, b)),
+    cmp(t, field(_.ray.tmin))(Fp.ge), cmp(t, field(_.tmax))(Fp.lt))
+  private val hit = pipe.op((conds.map(_.map(0)(_.asUInt)) :+ mixed.map(0)(_.asUInt)), 1)(c =>
+    c.init.map(_.asBool).reduce(_ && _) && !c.last.asBool)
+  private val (tDone, dDone) = pipe.join(hit, t, u, v)
+  private val j = pipe.delayTo(job, tDone).v
   val res = Wire(new TriResult(p))
-  res.tu := m9.tu
-  res.hit := !mixed9 && !Fp.eq(f, det9, zero) && Fp.ge(f, tuv(0), m9.tmin) && Fp.lt(f, tuv(0), m9.tmax) && !m9.err
-  res.t := tuv(0); res.u := tuv(1); res.v := tuv(2)
-  res.prim := m9.prim
-  res.last := m9.last
-  res.err := m9.err
-  io.out.bits := RegNext(res)
-  io.out.valid := RegNext(v9, false.B)
-}
-
-object WatertightPipe {
-  /** Cycles from input to output. */
-  def latency(p: PlatformParams): Int = 10 + p.divStages
+  res.tu := j.tu
+  res.hit := pipe.delayTo(hit, tDone).v && !j.err
+  res.t := pipe.delayTo(t, tDone).v; res.u := pipe.delayTo(u, tDone).v; res.v := pipe.delayTo(v, tDone).v
+  res.prim := j.words(9)
+  res.last := j.last
+  res.err := j.err
+  private val out = stage(Timed(res, tDone, dDone + 1))
+  /** Cycles from a job to its result (10 + divStages with PIPELINE=none). */
+  val latency: Int = out.at
+  io.out.bits := out.v
+  io.out.valid := pipe.valid(io.in.valid, latency)
 }

@@ -27,11 +27,11 @@ class TraversalController(p: PlatformParams) extends Module {
 
   // Ray preparation: the pipeline cannot stall, so a ray enters only when the queue behind it has room
   // for everything already in flight.
-  private val lat = p.divStages
+  val divs = Seq.fill(TraversalController.dividers)(Module(new FpDivPipe(f, p.divStages, p.stageBudget)))
+  private val lat = divs.head.latency
   val prepared = Module(new Queue(new TuRay(p), lat + 2))
   val inFlight = RegInit(0.U(log2Ceil(lat + 3).W))
   io.in.ready := inFlight +& prepared.io.count < (lat + 2).U
-  val divs = Seq.fill(TraversalController.dividers)(Module(new FpDivPipe(f, lat)))
   for (a <- 0 until 3) {
     divs(a).io.in.valid := io.in.fire
     divs(a).io.in.bits.a := one

@@ -6,7 +6,7 @@ import chiseltest._
 import chiseltest.simulator.VerilatorBackendAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.util.Random
-import rtaccel.config.{PlatformParams, TriTest}
+import rtaccel.config.{PlatformParams, Pipelining, TriTest}
 import rtaccel.fp.FpFormat
 import rtaccel.model.{PreparedRay, RayBox, RayBoxOutward, RayTriangle}
 
@@ -45,16 +45,21 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   // TRI_TEST=watertight adds the exit-distance slack (PlatformParams.boxSlackUlps) to the same pipe
   private val regress = rtaccel.Regress.full
   // (make test: fp32 and bf16 here; the watertight slack in PlatformSpec's all-formats circuit)
-  private val boxFormats = Seq((FpFormat.fp32, TriTest.Mt, 20000), (FpFormat.parse("bf16"), TriTest.Mt, 3000)) ++
-    (if (regress) Seq((FpFormat(4, 7), TriTest.Mt, 1500), // what BOX_FORMAT=m7 fits to a unit-scale scene: a 4-bit exponent that overflows
-      (FpFormat.fp32, TriTest.Watertight, 5000), (FpFormat.parse("fp16"), TriTest.Mt, 6000), (FpFormat.parse("fp24"), TriTest.Mt, 6000),
-      (FpFormat.parse("bf16"), TriTest.Watertight, 6000)) else Nil)
-  for ((bf, tt, n) <- boxFormats)
-  test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
-    val pb = p.copy(boxFormat = bf, triTest = tt)
+  // PIPELINE: the default (auto: 6 LUT levels at 150 MHz on Virtex-5), the fixed stages (none) and a deep one (3)
+  private val auto = Pipelining.Auto; private val fixed = Pipelining.Fixed; private val deep = Pipelining.Levels(3)
+  private val boxFormats = Seq((FpFormat.fp32, TriTest.Mt, 20000, auto), (FpFormat.parse("bf16"), TriTest.Mt, 3000, fixed)) ++
+    (if (regress) Seq((FpFormat(4, 7), TriTest.Mt, 1500, auto), // what BOX_FORMAT=m7 fits to a unit-scale scene: a 4-bit exponent that overflows
+      (FpFormat.fp32, TriTest.Watertight, 5000, deep), (FpFormat.parse("fp16"), TriTest.Mt, 6000, auto), (FpFormat.parse("fp24"), TriTest.Mt, 6000, deep),
+      (FpFormat.parse("bf16"), TriTest.Watertight, 6000, auto), (FpFormat.fp32, TriTest.Mt, 5000, fixed), (FpFormat.parse("bf16"), TriTest.Mt, 3000, deep)) else Nil)
+  for ((bf, tt, n, pl) <- boxFormats)
+  test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}, PIPELINE=${pl.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
+    val pb = p.copy(boxFormat = bf, triTest = tt, pipelining = pl)
     val outward = if (bf == FpFormat.fp32) None else Some(new RayBoxOutward(bf, pb.boxSlackUlps))
     test(new BoxPipe(pb)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
-      val lat = 4
+      val lat = dut.latency
+      if (pl == fixed) assert(lat == 4, s"PIPELINE=none keeps the four stages (latency $lat)")
+      else assert(lat > 4, s"PIPELINE=${pl.name} adds registers (latency $lat)")
+      info(s"latency $lat cycles")
       val expected = scala.collection.mutable.Queue[(Seq[Boolean], Seq[BigInt])]()
       for (cycle <- 0 until n + lat) {
         if (cycle < n) {
@@ -103,12 +108,14 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   /** One triangle pipe against its model, `n` jobs back to back: random and degenerate primitives, and (for the
     * watertight test) near ties that take the binary64 path.
     */
-  private def triPipeTest[T <: Module](name: String, n: Int, pipe: => T, lat: Int, io: T => (Valid[TriJob], Valid[TriResult]),
+  private def triPipeTest[T <: Module](name: String, n: Int, pipe: => T, latency: T => Int, io: T => (Valid[TriJob], Valid[TriResult]),
                                       model: (PreparedRay, Float, Array[Float], RayTriangle.Result) => Boolean, ties: Boolean,
                                       wide: Boolean = false, annos: Seq[firrtl2.annotations.Annotation] = Nil): Unit =
     test(s"$name == its model on $n random and degenerate primitives, one per cycle") {
       test(pipe).withAnnotations(Seq(VerilatorBackendAnnotation) ++ annos) { dut =>
         val (in, outIo) = io(dut)
+        val lat = latency(dut)
+        info(s"latency $lat cycles")
         val expected = scala.collection.mutable.Queue[(Boolean, Seq[BigInt], Boolean)]()
         val out = new RayTriangle.Result
         var hits = 0; var tieJobs = 0
@@ -159,17 +166,23 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
       }
     }
 
-  triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe)", 20000, new TriPipe(p), TriPipe.latency(p), d => (d.io.in, d.io.out),
+  triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=auto)", 20000, new TriPipe(p), _.latency, d => (d.io.in, d.io.out),
     (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
   private val watertight = new rtaccel.model.RayTriangleWatertight
-  triPipeTest[WatertightPipe]("watertight pipe (WatertightPipe)", 20000, new WatertightPipe(p), WatertightPipe.latency(p),
-    d => (d.io.in, d.io.out), (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true)
+  for (pl <- Seq(deep) ++ (if (regress) Seq(auto, fixed) else Nil)) {
+    val pp = p.copy(pipelining = pl)
+    triPipeTest[WatertightPipe](s"watertight pipe (WatertightPipe, PIPELINE=${pl.name})", 20000, new WatertightPipe(pp), _.latency,
+      d => (d.io.in, d.io.out), (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true)
+  }
+  if (regress) triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=none)", 20000, new TriPipe(p.copy(pipelining = fixed)),
+    d => { assert(d.latency == 8 + p.divStages, "PIPELINE=none keeps 8 + divStages"); d.latency }, d => (d.io.in, d.io.out),
+    (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
   // TRI_FORMAT: the pipe in a wider format against the SoftFloat twin (fp64 in make test; e8m31, the same exponent
   // as fp32, in make regress: each is a Verilator build, compiled without C++ optimisation: the wide multipliers and
   // divider make a large model whose -O1 build takes minutes, longer than its 20000 cycles run unoptimised)
-  for (tf <- Seq(FpFormat.fp64) ++ (if (regress) Seq(FpFormat(8, 31)) else Nil)) {
-    val pw = p.copy(triFormat = tf); val twin = new rtaccel.model.RayTriangleWide(tf)
-    triPipeTest[TriPipe](s"Möller–Trumbore pipe at TRI_FORMAT=${tf.name}", 20000, new TriPipe(pw), TriPipe.latency(pw),
+  for ((tf, pl) <- Seq((FpFormat.fp64, fixed)) ++ (if (regress) Seq((FpFormat(8, 31), auto), (FpFormat.fp64, auto)) else Nil)) {
+    val pw = p.copy(triFormat = tf, pipelining = pl); val twin = new rtaccel.model.RayTriangleWide(tf)
+    triPipeTest[TriPipe](s"Möller–Trumbore pipe at TRI_FORMAT=${tf.name}, PIPELINE=${pl.name}", 20000, new TriPipe(pw), _.latency,
       d => (d.io.in, d.io.out), (r, tmax, v, o) => twin.testSoft(r, tmax, v(0), v(1), v(2), v(3), v(4), v(5), v(6), v(7), v(8), o),
       ties = false, wide = true, annos = rtaccel.sim.VerilatorBuild("o0", Nil, Seq("-O0"), Some("-O0"), jobs = 1).annotations)
   }

@@ -30,7 +30,8 @@ object IuRoutingFormal {
   val beatBits = 256
   val addrBits = 12
   val primBase = 0x200
-  val platform: PlatformParams = PlatformParams(tus = 2, m = 2, mppl = 2, divStages = 0,
+  // the pipes at their fixed stages (PIPELINE=none): the proof is about routing, and its depth grows with their latency
+  val platform: PlatformParams = PlatformParams(tus = 2, m = 2, mppl = 2, divStages = 0, pipelining = rtaccel.config.Pipelining.Fixed,
     refs = RefFormat(nodeIdBits = 3, primIndexBits = 3, countBits = 1, levelBits = 0),
     hw = HwLimits(axiAddrBits = addrBits, iuOutstanding = 2))
 }

@@ -27,7 +27,9 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
   // Verilator: the three dividers run at ~35 cycles/s in treadle. One build per circuit, shared by the tests
   // that use it (CachingAnnotation keyed on the circuit, in a folder named after its parameters).
   private def sim(p: PlatformParams) = Seq(VerilatorBackendAnnotation, VerilatorCFlags(Seq("-O1")), CachingAnnotation,
-    TargetDirAnnotation(s"test_run_dir/TraversalControllerSpec/tus${p.tus}-div${p.divStages}"))
+    TargetDirAnnotation(s"test_run_dir/TraversalControllerSpec/tus${p.tus}-div${p.divStages}-pipe${p.pipelining.name}"))
+  /** The divider with `div` register levels where the stages spread them (PIPELINE=none). */
+  private def fixed(tus: Int, div: Int) = PlatformParams(tus = tus, divStages = div, pipelining = rtaccel.config.Pipelining.Fixed)
   private def bits(f: Float): Long = java.lang.Float.floatToRawIntBits(f).toLong & 0xffffffffL
   private def float(b: Long): Float = java.lang.Float.intBitsToFloat(b.toInt)
 
@@ -93,7 +95,7 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
     val rnd = new Random(seed * 7919 + 1)
     var cycles = 0L
     test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
-      val lat = p.divStages
+      val lat = dut.divs.head.latency
       sealed trait TuState
       case class Free(from: Long) extends TuState
       case class Busy(r: HostRay, until: Long) extends TuState
@@ -174,14 +176,15 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
     cycles
   }
 
-  for ((tus, div, n, seed) <- Seq((5, 6, 3000, 1L), (3, 0, 1500, 2L), (1, 2, 600, 3L), (5, 6, 3000, 4L)))
-    test(s"random rays and TUs: 1/d bit-exact, lowest free TU, each result out once (TUs=$tus, divider stages=$div, $n rays, seed $seed)") {
-      val c = randomRun(PlatformParams(tus = tus, divStages = div), n, seed)
+  // divider stages as given (PIPELINE=none), and the registers PIPELINE=auto places
+  for ((tus, div, n, seed) <- Seq((5, Some(6), 3000, 1L), (3, Some(0), 1500, 2L), (1, Some(2), 600, 3L), (5, None, 3000, 4L)))
+    test(s"random rays and TUs: 1/d bit-exact, lowest free TU, each result out once (TUs=$tus, divider ${div.fold("PIPELINE=auto")(d => s"stages=$d")}, $n rays, seed $seed)") {
+      val c = randomRun(div.fold(PlatformParams(tus = tus))(d => fixed(tus, d)), n, seed)
       info(s"$n rays in $c cycles")
     }
 
   test("reciprocals of every special direction component, bit-exact (all 19 specials on each axis)") {
-    val p = PlatformParams(tus = 5, divStages = 6)
+    val p = fixed(5, 6)
     test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
       val rays = specials.indices.map { i =>
         HostRay(i.toLong, Array(1f, 2f, 3f, specials(i), specials((i + 7) % specials.length), specials((i + 13) % specials.length), 0f, 1f))
@@ -202,7 +205,7 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
   }
 
   test("one ray per cycle when TUs are free: no stall, always to TU 0, in order") {
-    val p = PlatformParams(tus = 5, divStages = 6)
+    val p = fixed(5, 6)
     val rays = hostRays(11, 64)
     test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
       for (i <- 0 until p.tus) { dut.io.tuRay(i).ready.poke(true.B); dut.io.tuResult(i).valid.poke(false.B) }
@@ -224,7 +227,7 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
   }
 
   test("all TUs busy: the TC takes exactly as many rays as its queue holds, loses none, then hands them out in order") {
-    val p = PlatformParams(tus = 3, divStages = 0)
+    val p = fixed(3, 0)
     val rays = hostRays(12, 40)
     test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
       for (i <- 0 until p.tus) { dut.io.tuRay(i).ready.poke(false.B); dut.io.tuResult(i).valid.poke(false.B) }

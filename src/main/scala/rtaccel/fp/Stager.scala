@@ -1,0 +1,91 @@
+package rtaccel.fp
+
+import chisel3._
+import chisel3.util._
+
+/** A value of a no-stall pipeline: valid `at` cycles after the pipeline's input, with an estimated `depth` of LUT
+  * levels of logic since its last register. Operators built on [[Stager]] read their inputs at the latest of their
+  * `at`s (earlier ones are delayed by shift registers) and add registers where the depth would pass the budget,
+  * so a pipeline's latency follows from its budget instead of being written down by hand.
+  */
+final case class Timed[+T <: Data](v: T, at: Int, depth: Int) {
+  def map[U <: Data](levels: Int)(fn: T => U): Timed[U] = Timed(fn(v), at, depth + levels)
+}
+
+/** Register placement of a pipelined datapath (PIPELINE=, docs/timing.md). `budget` = the most LUT levels
+  * allowed between two registers; None keeps the fixed stages the design had before pipelining was a parameter
+  * (no register inside an operator). Every register this places is a plain `RegNext` (the pipelines never stall),
+  * so results do not depend on where the registers go: only latencies do.
+  */
+final class Stager(val budget: Option[Int]) {
+  require(budget.forall(_ >= 1), s"a pipeline budget must be at least 1 LUT level (got ${budget.get})")
+  // one shift register per (value, cycle) however many operators read it there
+  private val delayed = new java.util.IdentityHashMap[Data, scala.collection.mutable.Map[Int, Data]]()
+
+  /** A module input: `depth` levels of logic in front of it that this module cannot see (the driver's). */
+  def in[T <: Data](x: T, depth: Int = 0): Timed[T] = Timed(x, 0, depth)
+
+  /** A register on x, always (a stage boundary of the design); a value registered already is passed on. */
+  def reg[T <: Data](x: Timed[T]): Timed[T] = if (budget.isDefined && x.depth == 0 && x.at > 0) x else Timed(RegNext(x.v), x.at + 1, 0)
+
+  /** x as read `at` (>= x.at): delayed by shift registers when later. */
+  def delayTo[T <: Data](x: Timed[T], at: Int): Timed[T] = {
+    require(at >= x.at, s"cannot read a value valid at cycle ${x.at} at cycle $at")
+    if (at == x.at) x else {
+      val byAt = delayed.computeIfAbsent(x.v, _ => scala.collection.mutable.Map[Int, Data]())
+      Timed(byAt.getOrElseUpdate(at, ShiftRegister(x.v, at - x.at)).asInstanceOf[T], at, 0)
+    }
+  }
+
+  /** The latest of xs' times and the depth there. */
+  def join(xs: Timed[Data]*): (Int, Int) = {
+    val at = xs.map(_.at).max
+    (at, xs.filter(_.at == at).map(_.depth).max)
+  }
+
+  /** A valid bit for a value valid at `at`, from the valid of the pipeline's input (reset to false). */
+  def valid(v: Bool, at: Int): Bool = ShiftRegister(v, at, false.B, true.B)
+
+  /** One segment of `levels` LUT levels: a register goes in front of it when the path would pass the budget. */
+  def step[A <: Data, B <: Data](x: Timed[A], levels: Int)(fn: A => B): Timed[B] = {
+    val cut = budget.exists(b => x.depth > 0 && x.depth + levels > b)
+    val y = if (cut) Timed(RegNext(x.v), x.at + 1, 0) else x
+    Timed(fn(y.v), y.at, y.depth + levels)
+  }
+
+  /** `fn` of several inputs read at the same cycle, as one segment of `levels`. */
+  def op[B <: Data](xs: Seq[Timed[UInt]], levels: Int)(fn: Seq[UInt] => B): Timed[B] = {
+    val (at, d) = join(xs: _*)
+    val aligned = xs.map(delayTo(_, at))
+    val v = VecInit(aligned.map(_.v))
+    step(Timed(v, at, d), levels)(vv => fn(vv.toSeq))
+  }
+
+  /** Many values read at one cycle (a stage's operands). */
+  def align[T <: Data](xs: Seq[Timed[T]]): Seq[Timed[T]] = {
+    val at = xs.map(_.at).max
+    xs.map(delayTo(_, at))
+  }
+}
+
+object Stager {
+  /** No register inside an operator: the combinational operators of [[Fp]]. */
+  def none: Stager = new Stager(None)
+}
+
+/** Estimated LUT levels (six-input LUTs) of the pieces the operators are made of; the registers [[Stager]] places
+  * follow these, and make area's measured levels show how close they are (docs/timing.md).
+  */
+object Depth {
+  private def log(b: Double, n: Int): Int = math.ceil(math.log(n.toDouble max 2) / math.log(b) - 1e-9).toInt
+  /** An OR (or AND) of n bits. */
+  def reduce(n: Int): Int = log(6, n) max 1
+  /** A shifter by up to n places: one 4:1 mux per LUT per two shift bits. */
+  def shift(n: Int): Int = (log(2, n) + 1) / 2 max 1
+  /** An adder or comparator of n bits on a carry chain: a LUT into the chain and the chain itself. */
+  def carry(n: Int): Int = 1 + n / 24
+  /** A leading-zero count of n bits (a tree of 2:1 selections, two per LUT). */
+  def lzc(n: Int): Int = (log(2, n) + 1) / 2 + 1
+  /** A multiplier of n x n bits: in DSP slices with their cascade, counted as LUT levels of the same delay. */
+  def mul(n: Int): Int = if (n <= 18) 4 else 6
+}
