@@ -124,8 +124,18 @@ object Fp {
     val sp = new Special
   }
 
+  /** roundPack after rounding: the m+2-bit significand (a carry into its top bit moves to the next binade). */
+  class Rounded(val m: Int, val e: Int) extends Bundle {
+    val sign = Bool()
+    val eLow = UInt(e.W)   // the exponent field before a rounding carry: eOut - 1, low bits
+    val bigExp = Bool()    // eOut - 1 >= maxExp: overflow whatever the rounding
+    val rounded = UInt((m + 2).W)
+    val toPos = Bool()
+    val sp = new Special
+  }
+
   /** Normalise, round (to nearest even, or directed by `toPos` when `directed`) and pack a [[RoundIn]] into fo,
-    * in three segments (shift amounts; shifts; rounding and packing) between which `pipe` may place registers.
+    * in four segments (shift amounts; shifts; rounding; packing) between which `pipe` may place registers.
     * `exp` is a signed biased exponent that may lie outside the representable range (underflow goes to
     * subnormals/zero, overflow to inf). Hardware trimming for callers that know their range: `canUnderflow = false`
     * promises exp >= 1 (drops the right shifter), `maxLeftShift` bounds sig's leading zeros that need normalising
@@ -172,25 +182,32 @@ object Fp {
       o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp
       o
     }
-    // 3: round and pack
-    pipe.step(norm, Depth.reduce(n - m) + Depth.carry(m + e) + 2) { r =>
+    // 3: round: the rounding decision and the increment
+    val rnd = pipe.step(norm, Depth.reduce(n - m) + 2 + Depth.carry(m + 2)) { r =>
       val s = r.s
-      val sign = r.sign
       val kept = s(n - 1, n - 1 - m) // m+1 bits, hidden bit on top
       val guard = s(n - 2 - m)
       val low = if (n - 3 - m >= 0) s(n - 3 - m, 0).orR else false.B
       val sticky = r.sticky || low
       // nearest even, or (directed) away from zero exactly when the direction points away from zero
+      val up = if (directed) (r.toPos =/= r.sign) && (guard || sticky) else guard && (sticky || kept(0))
+      val o = Wire(new Rounded(m, e))
+      o.rounded := kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
+      // beside the increment: the exponent field of the packing below
+      val eM1 = r.eOut - 1.S
+      o.bigExp := eM1 >= f.maxExp.S
+      o.eLow := eM1.asUInt(e - 1, 0)
+      o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp
+      o
+    }
+    // 4: pack, overflow and the special results
+    pipe.step(rnd, Depth.carry(m + e) + 3) { r =>
+      val sign = r.sign
       val awayDir = if (directed) Some(r.toPos =/= sign) else None
-      val up = awayDir.fold(guard && (sticky || kept(0)))(a => a && (guard || sticky))
-      val rounded = kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
       // Packing trick: ((eOut-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
       // (hidden bit 0, eOut = 1) packs with exponent field 0, and a rounding carry bumps the exponent.
-      val eM1 = r.eOut - 1.S
-      val bigExp = eM1 >= f.maxExp.S
-      val eLow = eM1.asUInt(e - 1, 0)
-      val sum = Cat(eLow, 0.U(m.W)) +& rounded
-      val ovf = bigExp || sum >= (BigInt(f.maxExp) << m).U
+      val sum = Cat(r.eLow, 0.U(m.W)) +& r.rounded
+      val ovf = r.bigExp || sum >= (BigInt(f.maxExp) << m).U
       // an overflow rounded toward zero stays at the largest finite value
       val ovfValue = awayDir.fold(packInf(f, sign))(a => Mux(a, packInf(f, sign), Cat(sign, (f.maxExp - 1).U(e.W), Fill(m, 1.U(1.W)))))
       val finite = Mux(ovf, ovfValue, Cat(sign, sum(e + m - 1, 0)))
@@ -364,16 +381,42 @@ object Fp {
     */
   def mulWide(f: FpFormat, fo: FpFormat, a: UInt, b: UInt): UInt = mulCore(f, a, b, fo, None)
 
+  /** mulCore's product in two halves of the multiplier b (pipelined wide multipliers): a * b's low bits and a *
+    * b's high bits, summed in the next segment.
+    */
+  class MulParts(n: Int, lo: Int, ew: Int) extends Bundle {
+    val pLo = UInt((n + lo).W)
+    val pHi = UInt((2 * n).W)
+    val exp = SInt(ew.W)
+    val sign = Bool()
+    val toPos = Bool()
+    val sp = new Special
+  }
+
   private def mulCore(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt], fo: FpFormat, toPos: Option[Timed[Bool]]): Timed[UInt] = {
     val ew = expW(f) max expW(fo)
-    val r = pipe.op(Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt)), Depth.mul(f.manBits + 1)) { v =>
+    val n = f.manBits + 1
+    // with a budget, a significand wider than one DSP input (18 bits) is multiplied in two parts and summed after
+    // a possible register: the parts map to DSP slices and the sum to a carry chain
+    val lo = 17
+    val split = pipe.budget.isDefined && n > 18
+    val parts = pipe.op(Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt)), if (split) Depth.mul(18) else Depth.mul(n)) { v =>
       val ua = new Unpacked(f, v(0))
       val ub = new Unpacked(f, v(1))
-      val sign = ua.sign ^ ub.sign
-      val prod = ua.sig * ub.sig // 2m+2 bits, binary point after the top bit pair
-      val exp = (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
+      val o = Wire(new MulParts(n, lo, ew))
+      o.sign := ua.sign ^ ub.sign
+      o.exp := (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
+      o.toPos := (if (toPos.isDefined) v(2)(0) else false.B)
       val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
-      roundIn(sign, exp, prod, false.B, toPos.map(_ => v(2)(0)), special(isNaN, ua.isInf || ub.isInf, ua.isZero || ub.isZero, sign))
+      o.sp := special(isNaN, ua.isInf || ub.isInf, ua.isZero || ub.isZero, o.sign)
+      if (split) { o.pLo := ua.sig * ub.sig(lo - 1, 0); o.pHi := ua.sig * ub.sig(n - 1, lo) }
+      else { o.pLo := DontCare; o.pHi := ua.sig * ub.sig } // the whole product, 2n bits, in pHi
+      o
+    }
+    val r = pipe.step(parts, if (split) Depth.carry(2 * n) else 0) { x =>
+      // 2m+2 bits, binary point after the top bit pair
+      val prod = if (split) (x.pHi << lo) + x.pLo else x.pHi
+      roundIn(x.sign, x.exp, prod(2 * n - 1, 0), false.B, toPos.map(_ => x.toPos), x.sp)
     }
     roundPackT(pipe, fo, r, directed = toPos.isDefined)
   }
@@ -400,32 +443,51 @@ object Fp {
   /** Number of recurrence steps: m+1 significand bits, a guard bit and one bit for the quotient's range (1/2, 2). */
   def divSteps(f: FpFormat): Int = f.manBits + 3
 
-  private def normalise(f: FpFormat, u: Unpacked): (UInt, SInt) = {
-    val lz = lzc(u.sig)
-    val sigN = shlTrunc(u.sig, lz)
-    (sigN, u.exp.zext.pad(expW(f)) - lz.zext)
+  /** divPre after the leading-zero counts: the operands' significands, their counts and the exponent before
+    * normalising.
+    */
+  class DivPreMid(val f: FpFormat) extends Bundle {
+    val resNaN = Bool()
+    val resInf = Bool()
+    val resZero = Bool()
+    val sign = Bool()
+    val exp = SInt(expW(f).W)
+    val sigA = UInt((f.manBits + 1).W)
+    val sigB = UInt((f.manBits + 1).W)
+    val lzA = UInt(log2Ceil(f.manBits + 1).W)
+    val lzB = UInt(log2Ceil(f.manBits + 1).W)
   }
 
-  def divPre(f: FpFormat, a: UInt, b: UInt): DivState = {
+  /** divPre's first half: classes, the result's sign and the leading zeros of both significands. */
+  def divPreCount(f: FpFormat, a: UInt, b: UInt): DivPreMid = {
     val ua = new Unpacked(f, a)
     val ub = new Unpacked(f, b)
-    val s = Wire(new DivState(f))
-    val sign = ua.sign ^ ub.sign
+    val s = Wire(new DivPreMid(f))
     val isNaN = ua.isNaN || ub.isNaN || (ua.isZero && ub.isZero) || (ua.isInf && ub.isInf)
     val isInf = ua.isInf || ub.isZero
     val isZero = ua.isZero || ub.isInf
     s.resNaN := isNaN
     s.resInf := !isNaN && isInf
     s.resZero := !isNaN && !isInf && isZero
-    val (na, ea) = normalise(f, ua)
-    val (nb, eb) = normalise(f, ub)
-    s.sign := sign
-    s.exp := ea - eb + f.bias.S
-    s.divisor := nb
-    s.rem := na
+    s.sign := ua.sign ^ ub.sign
+    s.exp := ua.exp.zext.pad(expW(f)) - ub.exp.zext.pad(expW(f)) + f.bias.S
+    s.sigA := ua.sig; s.sigB := ub.sig
+    s.lzA := lzc(ua.sig); s.lzB := lzc(ub.sig)
+    s
+  }
+
+  /** divPre's second half: both significands normalised, the exponent corrected by their shifts. */
+  def divPreShift(f: FpFormat, m: DivPreMid): DivState = {
+    val s = Wire(new DivState(f))
+    s.resNaN := m.resNaN; s.resInf := m.resInf; s.resZero := m.resZero; s.sign := m.sign
+    s.exp := m.exp - m.lzA.zext + m.lzB.zext
+    s.divisor := shlTrunc(m.sigB, m.lzB)
+    s.rem := shlTrunc(m.sigA, m.lzA)
     s.quo := 0.U
     s
   }
+
+  def divPre(f: FpFormat, a: UInt, b: UInt): DivState = divPreShift(f, divPreCount(f, a, b))
 
   def divStep(f: FpFormat, in: DivState): DivState = {
     val s = Wire(new DivState(f))
@@ -443,7 +505,7 @@ object Fp {
     * or m+1 (normalised operands: quotient in (1/2, 2), at most one leading zero).
     */
   def divPostT(pipe: Stager, f: FpFormat, x: Timed[DivState]): Timed[UInt] = {
-    val r = x.map(Depth.reduce(f.manBits + 2)) { s =>
+    val r = pipe.step(x, Depth.reduce(f.manBits + 2) + 1) { s =>
       roundIn(s.sign, s.exp, s.quo, s.rem =/= 0.U, None, special(s.resNaN, s.resInf, s.resZero, s.sign))
     }
     roundPackT(pipe, f, r, maxLeftShift = 1)

@@ -24,7 +24,10 @@ class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None
   private val (res, resValid, lat) = budget match {
     case Some(_) =>
       val pipe = new Stager(budget)
-      var st = pipe.step(pipe.in(io.in.bits, FpDivPipe.inputDepth), FpDivPipe.preLevels(f))(x => Fp.divPre(f, x.a, x.b))
+      // the counts beside the exponent difference (two adders in a row, measured 7 levels for fp32 on xc5v)
+      val counted = pipe.step(pipe.in(io.in.bits, FpDivPipe.inputDepth),
+        (Depth.lzc(f.manBits + 1) max (2 * Depth.carry(f.expBits + 2) + 3)) + 1)(x => Fp.divPreCount(f, x.a, x.b))
+      var st = pipe.step(counted, Depth.shift(f.manBits + 1) + 1)(Fp.divPreShift(f, _))
       for (_ <- 1 to steps) st = pipe.step(st, FpDivPipe.stepLevels(f))(s => Fp.divStep(f, s))
       val out = pipe.reg(Fp.divPostT(pipe, f, st))
       (out.v, pipe.valid(io.in.valid, out.at), out.at)
@@ -52,9 +55,10 @@ object FpDivPipe {
   private val postWeight = 4.0
   /** LUT levels assumed in front of the divider's inputs (a selection in the caller's stage). */
   val inputDepth: Int = 1
-  private[fp] def preLevels(f: FpFormat): Int = Depth.lzc(f.manBits + 1) + Depth.shift(f.manBits + 1) + 1
-  /** One restoring step: the compare-and-subtract on a carry chain and the selection of the remainder. */
-  private[fp] def stepLevels(f: FpFormat): Int = Depth.carry(f.manBits + 2) + 1
+  /** One restoring step: the compare on a carry chain (ABC puts LUTs in front of it), the selection of the
+    * remainder and the subtract (measured: about four levels for fp32 on xc5v, docs/timing.md).
+    */
+  private[fp] def stepLevels(f: FpFormat): Int = Depth.carry(f.manBits + 2) + 2
 
   /** Register levels after each of the divSteps(f)+2 chain units; sums to `stages`. Cut j (1..stages) goes
     * after the unit whose cumulative delay is nearest to j/(stages+1) of the total, so the stages are balanced.
