@@ -4,7 +4,7 @@ import org.scalatest.funsuite.AnyFunSuite
 import rtaccel.TestScenes
 import rtaccel.cli.{Cli, Simulate}
 import rtaccel.config.TriTest
-import rtaccel.config.{RespOrder, CacheParams, CachePolicy, Presets}
+import rtaccel.config.{RespOrder, CacheParams, CachePolicy, Pipelining, Presets}
 import rtaccel.model.MemFaults
 import rtaccel.scene.{Rays, Scene}
 
@@ -17,9 +17,12 @@ import rtaccel.scene.{Rays, Scene}
   */
 class PlatformSpec extends AnyFunSuite {
   private val full = rtaccel.Regress.full
-  private val grid: Seq[(Int, Int, Seq[Int])] =
-    if (full) for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16))
-    else Seq((1, 4, Seq(1, 16)), (4, 2, Seq(2)))
+  // PIPELINE: every case at the presets' auto (registers for 150 MHz on the paper's Virtex-5) but one grid point
+  // at none (the fixed stages); make regress adds a deep budget
+  private val grid: Seq[(Int, Int, Seq[Int], Pipelining)] =
+    if (full) (for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16), Pipelining.Auto)) ++
+      Seq((4, 2, Seq(2), Pipelining.Fixed), (2, 4, Seq(4), Pipelining.Levels(3)))
+    else Seq((1, 4, Seq(1, 16), Pipelining.Auto), (4, 2, Seq(2), Pipelining.Fixed))
 
   private val scene = TestScenes.soup(31, 400)
   private val rays = {
@@ -39,12 +42,14 @@ class PlatformSpec extends AnyFunSuite {
                      node: CacheParams = CacheParams(), prim: CacheParams = CacheParams(), stack: Int = 64, errorRate: Double = 0.0, seed: Int = 1,
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
                      packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1,
-                     order: String = RespOrder.Request, rayStore: Boolean = false, forward: Boolean = false, banks: Int = 0) = {
+                     order: String = RespOrder.Request, rayStore: Boolean = false, forward: Boolean = false, banks: Int = 0,
+                     pipeline: Pipelining = Pipelining.Auto) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
       shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels,
-      respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward, nodeBanks = banks)
+      respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward, nodeBanks = banks,
+      pipelining = pipeline)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels-b$banks", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec"))
@@ -68,9 +73,10 @@ class PlatformSpec extends AnyFunSuite {
     o
   }
 
-  for ((tus, m, mppls) <- grid; mppl <- mppls)
-    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl") {
-      runOne(tus, m, mppl, rays, scene)
+  for ((tus, m, mppls, pl) <- grid; mppl <- mppls)
+    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl PIPELINE=${pl.name}") {
+      val j = runOne(tus, m, mppl, rays, scene, pipeline = pl).json
+      assert(j("pipeline")("mode").str == pl.name && j("pipeline")("budget_levels").isNull == (pl == Pipelining.Fixed), ujson.write(j("pipeline")))
     }
 
   // Caches (docs/caches.md): whole scene bit-exact, counts equal the model on the logged order, and no stale
