@@ -21,9 +21,9 @@ class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None
   })
 
   private val steps = Fp.divSteps(f)
+  private val pipe = new Stager(budget)
   private val (res, resValid, lat) = budget match {
     case Some(_) =>
-      val pipe = new Stager(budget)
       // the counts beside the exponent difference (two adders in a row, measured 7 levels for fp32 on xc5v)
       val counted = pipe.step(pipe.in(io.in.bits, FpDivPipe.inputDepth),
         (Depth.lzc(f.manBits + 1) max (2 * Depth.carry(f.expBits + 2) + 3)) + 1)(x => Fp.divPreCount(f, x.a, x.b))
@@ -43,6 +43,8 @@ class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None
       val (r, v) = delay(Fp.divPost(f, st), vld, regsAfter(steps + 1))
       (r, v, stages)
   }
+  /** Flip-flop bits of the pipeline registers (the state between steps: a census for the cost model). */
+  val regBits: Long = if (budget.isDefined) pipe.regBits else stages.toLong * (new Fp.DivState(f)).getWidth
   /** Cycles from an input to its result. */
   val latency: Int = lat
   io.out.valid := resValid

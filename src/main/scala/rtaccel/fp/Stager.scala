@@ -19,6 +19,10 @@ final case class Timed[+T <: Data](v: T, at: Int, depth: Int) {
   */
 final class Stager(val budget: Option[Int]) {
   require(budget.forall(_ >= 1), s"a pipeline budget must be at least 1 LUT level (got ${budget.get})")
+  private var bits = 0L
+  /** Flip-flop bits this Stager has placed so far (a census for the cost model; synthesis may trim unused ones). */
+  def regBits: Long = bits
+  private def count(x: Data, cycles: Int): Unit = bits += Stager.knownWidth(x).toLong * cycles
   // one shift register per (value, cycle) however many operators read it there
   private val delayed = new java.util.IdentityHashMap[Data, scala.collection.mutable.Map[Int, Data]]()
 
@@ -26,14 +30,15 @@ final class Stager(val budget: Option[Int]) {
   def in[T <: Data](x: T, depth: Int = 0): Timed[T] = Timed(x, 0, depth)
 
   /** A register on x, always (a stage boundary of the design); a value registered already is passed on. */
-  def reg[T <: Data](x: Timed[T]): Timed[T] = if (budget.isDefined && x.depth == 0 && x.at > 0) x else Timed(RegNext(x.v), x.at + 1, 0)
+  def reg[T <: Data](x: Timed[T]): Timed[T] =
+    if (budget.isDefined && x.depth == 0 && x.at > 0) x else { count(x.v, 1); Timed(RegNext(x.v), x.at + 1, 0) }
 
   /** x as read `at` (>= x.at): delayed by shift registers when later. */
   def delayTo[T <: Data](x: Timed[T], at: Int): Timed[T] = {
     require(at >= x.at, s"cannot read a value valid at cycle ${x.at} at cycle $at")
     if (at == x.at) x else {
       val byAt = delayed.computeIfAbsent(x.v, _ => scala.collection.mutable.Map[Int, Data]())
-      Timed(byAt.getOrElseUpdate(at, ShiftRegister(x.v, at - x.at)).asInstanceOf[T], at, 0)
+      Timed(byAt.getOrElseUpdate(at, { count(x.v, at - x.at); ShiftRegister(x.v, at - x.at) }).asInstanceOf[T], at, 0)
     }
   }
 
@@ -44,12 +49,12 @@ final class Stager(val budget: Option[Int]) {
   }
 
   /** A valid bit for a value valid at `at`, from the valid of the pipeline's input (reset to false). */
-  def valid(v: Bool, at: Int): Bool = ShiftRegister(v, at, false.B, true.B)
+  def valid(v: Bool, at: Int): Bool = { count(v, at); ShiftRegister(v, at, false.B, true.B) }
 
   /** One segment of `levels` LUT levels: a register goes in front of it when the path would pass the budget. */
   def step[A <: Data, B <: Data](x: Timed[A], levels: Int)(fn: A => B): Timed[B] = {
     val cut = budget.exists(b => x.depth > 0 && x.depth + levels > b)
-    val y = if (cut) Timed(RegNext(x.v), x.at + 1, 0) else x
+    val y = if (cut) { count(x.v, 1); Timed(RegNext(x.v), x.at + 1, 0) } else x
     Timed(fn(y.v), y.at, y.depth + levels)
   }
 
@@ -69,6 +74,11 @@ final class Stager(val budget: Option[Int]) {
 }
 
 object Stager {
+  /** Bits of x whose widths Chisel knows before inference (an inferred one counts 0: the census is a floor). */
+  def knownWidth(x: Data): Int = x match {
+    case a: Aggregate => a.getElements.map(knownWidth).sum
+    case e => e.widthOption.getOrElse(0)
+  }
   /** No register inside an operator: the combinational operators of [[Fp]]. */
   def none: Stager = new Stager(None)
 }

@@ -13,6 +13,13 @@ class BoxJob(p: PlatformParams) extends Bundle {
   val err = Bool()                     // read with a memory error: the words are not to be trusted
 }
 
+/** What a box result needs of its job besides the arithmetic. */
+class BoxMeta(p: PlatformParams) extends Bundle {
+  val tu = UInt(p.tuBits.W)
+  val err = Bool()
+  val cref = Vec(p.m, UInt(32.W))
+}
+
 /** M slab tests in parallel, one node per cycle, no stalls. The operation order is that of rtaccel.model.RayBox
   * (docs/numerics.md), so results equal the reference model bit for bit (with BOX_FORMAT narrower than fp32:
   * model.RayBoxOutward, rounded outward so that no box is lost):
@@ -97,20 +104,25 @@ class BoxPipe(p: PlatformParams) extends Module {
     (le, near32)
   }
   private val (tDone, dDone) = pipe.join(hits.flatMap { case (l, n) => Seq(l, n) }: _*)
-  private val j = at(job, tDone)
+  // what the result needs of the job besides the arithmetic, carried down the pipe (not the whole job)
+  private val j = at(job.map(0) { x =>
+    val m = Wire(new BoxMeta(p)); m.tu := x.tu; m.err := x.err; m.cref := VecInit((0 until p.m).map(c => x.words(7 * c + 6))); m
+  }, tDone)
   val res = Wire(new BoxResult(p))
   res.tu := j.tu
   res.err := j.err
   for (c <- 0 until p.m) {
     res.tnear(c) := at(hits(c)._2, tDone)
-    res.hit(c) := at(hits(c)._1, tDone) && j.words(7 * c + 6) =/= 0.U && !j.err
-    res.cref(c) := j.words(7 * c + 6)
+    res.hit(c) := at(hits(c)._1, tDone) && j.cref(c) =/= 0.U && !j.err
+    res.cref(c) := j.cref(c)
   }
   private val out = stage(Timed(res, tDone, dDone + 1))
   /** Cycles from a job to its result. */
   val latency: Int = out.at
   io.out.bits := out.v
   io.out.valid := pipe.valid(io.in.valid, latency)
+  /** Flip-flop bits of its pipeline registers, its divider's included (a census for the cost model). */
+  val regBits: Long = pipe.regBits
 }
 
 object BoxPipe {

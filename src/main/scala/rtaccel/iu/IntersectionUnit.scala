@@ -180,9 +180,9 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   val boxPipe = Module(new BoxPipe(p))
   boxPipe.io.in := boxIn
   // TRI_TEST: both pipes take the same job and give the same result, at their own latencies
-  val (triIn, triOut) = p.triTest match {
-    case TriTest.Mt => val t = Module(new TriPipe(p)); (t.io.in, t.io.out)
-    case TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.io.in, t.io.out)
+  val (triIn, triOut, triLatency) = p.triTest match {
+    case TriTest.Mt => val t = Module(new TriPipe(p)); (t.io.in, t.io.out, t.latency)
+    case TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.io.in, t.io.out, t.latency)
   }
   triIn := triJob
   io.box := boxPipe.io.out

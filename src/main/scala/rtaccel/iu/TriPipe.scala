@@ -14,6 +14,19 @@ class TriJob(p: PlatformParams) extends Bundle {
   val err = Bool()                // read with a memory error: never a hit
 }
 
+/** What a triangle result needs of its job besides the arithmetic, carried down the pipe (not the whole job). */
+class TriMeta(p: PlatformParams) extends Bundle {
+  val tu = UInt(p.tuBits.W)
+  val prim = UInt(32.W)
+  val last = Bool()
+  val err = Bool()
+}
+object TriMeta {
+  def apply(p: PlatformParams, j: TriJob): TriMeta = {
+    val m = Wire(new TriMeta(p)); m.tu := j.tu; m.prim := j.words(9); m.last := j.last; m.err := j.err; m
+  }
+}
+
 /** Möller–Trumbore, one primitive per cycle, no stalls, in the operation order of
   * rtaccel.model.RayTriangle (docs/numerics.md):
   *   1: e1 = v1-v0, e2 = v2-v0, s = o-v0          2: the six products of d x e2 and of s x e1
@@ -85,12 +98,12 @@ class TriPipe(p: PlatformParams) extends Module {
   private val hit = pipe.op(conds.map(_.map(0)(_.asUInt)), 1)(c => c.map(_.asBool).reduce(_ && _))
   private val tuv = Seq(t, u, v).map(narrow)
   private val (tDone, dDone) = pipe.join(Seq(hit) ++ tuv: _*)
-  private val j = pipe.delayTo(job, tDone).v
+  private val j = pipe.delayTo(job.map(0)(TriMeta(p, _)), tDone).v
   val res = Wire(new TriResult(p))
   res.tu := j.tu
   res.hit := pipe.delayTo(hit, tDone).v && !j.err
   res.t := pipe.delayTo(tuv(0), tDone).v; res.u := pipe.delayTo(tuv(1), tDone).v; res.v := pipe.delayTo(tuv(2), tDone).v
-  res.prim := j.words(9)
+  res.prim := j.prim
   res.last := j.last
   res.err := j.err
   private val out = stage(Timed(res, tDone, dDone + 1))
@@ -98,6 +111,8 @@ class TriPipe(p: PlatformParams) extends Module {
   val latency: Int = out.at
   io.out.bits := out.v
   io.out.valid := pipe.valid(io.in.valid, latency)
+  /** Flip-flop bits of its pipeline registers, its divider's included (a census for the cost model). */
+  val regBits: Long = pipe.regBits + div.regBits
 }
 
 object TriPipe {

@@ -101,12 +101,12 @@ class WatertightPipe(p: PlatformParams) extends Module {
   private val hit = pipe.op((conds.map(_.map(0)(_.asUInt)) :+ mixed.map(0)(_.asUInt)), 1)(c =>
     c.init.map(_.asBool).reduce(_ && _) && !c.last.asBool)
   private val (tDone, dDone) = pipe.join(hit, t, u, v)
-  private val j = pipe.delayTo(job, tDone).v
+  private val j = pipe.delayTo(job.map(0)(TriMeta(p, _)), tDone).v
   val res = Wire(new TriResult(p))
   res.tu := j.tu
   res.hit := pipe.delayTo(hit, tDone).v && !j.err
   res.t := pipe.delayTo(t, tDone).v; res.u := pipe.delayTo(u, tDone).v; res.v := pipe.delayTo(v, tDone).v
-  res.prim := j.words(9)
+  res.prim := j.prim
   res.last := j.last
   res.err := j.err
   private val out = stage(Timed(res, tDone, dDone + 1))
@@ -114,4 +114,6 @@ class WatertightPipe(p: PlatformParams) extends Module {
   val latency: Int = out.at
   io.out.bits := out.v
   io.out.valid := pipe.valid(io.in.valid, latency)
+  /** Flip-flop bits of its pipeline registers, its divider's included (a census for the cost model). */
+  val regBits: Long = pipe.regBits + div.regBits
 }

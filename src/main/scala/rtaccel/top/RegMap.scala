@@ -26,7 +26,7 @@ object RegMap {
 
   /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
   val VersionMajor = 2
-  val VersionMinor = 7
+  val VersionMinor = 8
   val Magic: Long = 0x52544143L // "RTAC"
 
   val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
@@ -79,6 +79,12 @@ object RegMap {
   val HitsDone = Reg("HITS_DONE", 0x040, RO, "hits returned in the current batch")
   val RaysIn = Reg("RAYS_IN", 0x044, RO, "rays accepted in the current batch")
 
+  val Pipeline = Reg("PIPELINE", 0x048, RO, "register stages of the datapaths (PIPELINE=, docs/timing.md)", Seq(
+    Field("BUDGET", 0, 8, "LUT levels allowed between two registers (0 = PIPELINE=none: the fixed stages)"),
+    Field("BOX_LATENCY", 8, 8, "cycles of the box test pipe (255: 255 or more)"),
+    Field("TRI_LATENCY", 16, 8, "cycles of the triangle test pipe of TRI_TEST (255: 255 or more)"),
+    Field("PREP_LATENCY", 24, 8, "cycles of the TC's ray preparation, 1/d (255: 255 or more)")))
+
   val CounterBase = 0x100
   /** Counter i is LO at CounterBase + 8 i, HI at + 4. */
   def counterRegs(names: Seq[String]): Seq[Reg] = names.zipWithIndex.flatMap { case (n, i) =>
@@ -87,7 +93,7 @@ object RegMap {
   }
 
   val fixed: Seq[Reg] = Seq(Id, Version, Config0, Config1, NodeCache, PrimCache, Formats, Formats2, Control, Status, IrqEnable,
-    IrqStatus, MaxLevel, RayCount, PrimBaseLo, PrimBaseHi, HitsDone, RaysIn)
+    IrqStatus, MaxLevel, RayCount, PrimBaseLo, PrimBaseHi, HitsDone, RaysIn, Pipeline)
   def all(counterNames: Seq[String]): Seq[Reg] = fixed ++ counterRegs(counterNames)
   /** Address bits of the AXI4-Lite port: the map with every counter fits. */
   def addrBits(counterNames: Seq[String]): Int = {

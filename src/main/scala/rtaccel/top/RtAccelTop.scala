@@ -31,7 +31,9 @@ object RtAccelTop {
   val counterNames: Seq[String] = eventNames ++ memoryNames
 
   /** The read-only configuration registers of RegMap: what a host driver checks before it uploads anything. */
-  def configWords(p: PlatformParams): Seq[(RegMap.Reg, BigInt)] = {
+  def configWords(p: PlatformParams): Seq[(RegMap.Reg, BigInt)] = configWords(p, rtaccel.iu.PipeLatencies.of(p))
+  /** The configuration words with the pipes' latencies given (the board top passes its own instances'). */
+  def configWords(p: PlatformParams, lat: rtaccel.iu.PipeLatencies): Seq[(RegMap.Reg, BigInt)] = {
     import RegMap._
     def word(r: Reg, vs: (String, Long)*): BigInt = vs.map { case (n, v) =>
       val f = r.fields.find(_.name == n).getOrElse(throw new IllegalArgumentException(s"${r.name} has no field $n"))
@@ -51,7 +53,10 @@ object RtAccelTop {
         "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
       Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
         "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L), "RESP_TAGGED" -> (if (p.respTagged) 1L else 0L),
-        "RAY_STORE" -> (if (p.rayStore) 1L else 0L), "TAG_FORWARD" -> (if (p.tagForward) 1L else 0L)))
+        "RAY_STORE" -> (if (p.rayStore) 1L else 0L), "TAG_FORWARD" -> (if (p.tagForward) 1L else 0L)),
+      // latencies past 255 cycles read 255
+      Pipeline -> word(Pipeline, "BUDGET" -> p.stageBudget.getOrElse(0).toLong, "BOX_LATENCY" -> math.min(255, lat.box).toLong,
+        "TRI_LATENCY" -> math.min(255, lat.tri).toLong, "PREP_LATENCY" -> math.min(255, lat.prep).toLong))
   }
 }
 
@@ -91,7 +96,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(clusterNodeCache, p.primCache, p.mppl),
     respBufferBeats = if (cached || p.ius > 1 || p.memChannels > 1 || p.respByPath) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
-  val regs = Module(new RegFile(RtAccelTop.configWords(p), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
+  private val latencies = rtaccel.iu.PipeLatencies(ius.head.boxPipe.latency, ius.head.triLatency, tc.divs.head.latency)
+  val regs = Module(new RegFile(RtAccelTop.configWords(p, latencies), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
   regs.io.lite <> io.lite
   io.irq := regs.io.irq
 

@@ -168,7 +168,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
     withHost(seed) { (dut, h) =>
       val counters = distinctCounters(h.rnd)
       pokeCounters(dut, counters)
-      val directed = Seq(0x001, 0x002, 0x003, 0x01e, 0x035, 0x048, 0x0fc, 0x101, 0x106,
+      val directed = Seq(0x001, 0x002, 0x003, 0x01e, 0x035, 0x04c, 0x0fc, 0x101, 0x106,
         RegMap.CounterBase + 8 * counterNames.length, (1 << addrBits) - 4, (1 << addrBits) - 1)
       val random = Iterator.continually(h.rnd.nextInt(1 << addrBits)).filterNot(mapped).take(150).toSeq
       val offsets = directed ++ random

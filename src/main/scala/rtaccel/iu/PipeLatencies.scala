@@ -1,0 +1,39 @@
+package rtaccel.iu
+
+import chisel3._
+import rtaccel.config.PlatformParams
+import rtaccel.fp.{FpDivPipe, FpFormat}
+
+/** Cycles from input to result of the fixed-latency pipes a configuration builds (they follow PIPELINE's budget):
+  * the box test, the triangle test of TRI_TEST and the TC's ray preparation (1/d). The register map reports them
+  * (RegMap.Pipeline), so a host or a waveform reader knows the build's depths.
+  * `regBits`: flip-flop bits of the three pipes' registers (box, tri with its divider, one ray-preparation divider),
+  * as their Stagers counted them (`of` fills them in; the board top, which needs only the latencies, leaves them 0).
+  */
+final case class PipeLatencies(box: Int, tri: Int, prep: Int, regBits: (Long, Long, Long) = (0L, 0L, 0L))
+
+object PipeLatencies {
+  private val memo = scala.collection.concurrent.TrieMap[String, PipeLatencies]()
+
+  /** The latencies of p's pipes, from an elaboration of the pipes alone (seconds; memoized per circuit-shaping key).
+    * Inside the board top's own elaboration, take them from its instances instead (RtAccelTop does).
+    */
+  def of(p: PlatformParams): PipeLatencies = {
+    val key = s"${p.stageBudget} ${p.m} ${p.tus} ${p.boxFormat} ${p.triTest} ${p.triFormat} ${p.divStages} ${p.boxSlackUlps}"
+    memo.getOrElseUpdate(key, {
+      val annos = new chisel3.stage.ChiselGeneratorAnnotation(() => new Probe(p)).elaborate
+      annos.collectFirst { case d: chisel3.stage.DesignAnnotation[_] => d.design.asInstanceOf[Probe].latencies }.get
+    })
+  }
+
+  /** The three pipes side by side, inputs left open: elaborated for their latencies only, never emitted. */
+  private class Probe(p: PlatformParams) extends Module {
+    private val box = Module(new BoxPipe(p))
+    private val (tri, triBits) = p.triTest match {
+      case rtaccel.config.TriTest.Mt => val t = Module(new TriPipe(p)); (t.latency, t.regBits)
+      case rtaccel.config.TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.latency, t.regBits)
+    }
+    private val prep = Module(new FpDivPipe(FpFormat.fp32, p.divStages, p.stageBudget))
+    val latencies: PipeLatencies = PipeLatencies(box.latency, tri, prep.latency, (box.regBits, triBits, prep.regBits))
+  }
+}
