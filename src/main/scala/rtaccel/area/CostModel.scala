@@ -123,29 +123,33 @@ object CostModel {
         throw new InputError("the cost model is calibrated on tag pipelines of one lookup per two cycles; TAG_FORWARD=1 with a cache needs FIDELITY=yosys")
       val scale = familyScale.getOrElse(fam, throw new InputError(
         s"the cost model has no calibration for family '$fam' (calibrated: ${familyScale.keys.toSeq.sorted.mkString(", ")}); use FIDELITY=yosys"))
-      val extraFf = pipelineFf(p)
+      val extra = pipelineRegs(p, fam)
       units.map { u =>
         val n = u.instances(p); val f = u.features(p)
         val per = resources.map { r =>
           val c = coef.getOrElse(u.name, Map.empty).getOrElse(r, Map.empty)
           val v = featuresFor(u, r, f).map { case (k, x) => c.getOrElse(k, 0.0) * x }.sum
           // a linear fit can dip below zero far from its data; no unit has negative cost
-          r -> (math.max(0.0, v) * (if (u.perInstance) n else 1) * scale.getOrElse(r, 1.0) + (if (r == "ff") extraFf.getOrElse(u.name, 0.0) else 0.0))
+          r -> (math.max(0.0, v) * (if (u.perInstance) n else 1) * scale.getOrElse(r, 1.0) + extra.get(r).flatMap(_.get(u.name)).getOrElse(0.0))
         }.toMap
         (u.name, per, n)
       }
     }
-    /** The flip-flops PIPELINE adds to each pipelined unit (all its instances): the register bits its Stagers place at
-      * p's budget less those of the fixed stages the fit was made on, counted at elaboration (iu.PipeLatencies).
-      * The triangle pipe's count holds its divider's, which the synthesis books under FpDivPipe: it goes there.
+    /** The registers PIPELINE adds to each pipelined unit (all its instances): the register bits its Stagers place at
+      * p's budget less those of the fixed stages the fit was made on, counted at elaboration (iu.PipeLatencies). On
+      * Xilinx families a delay chain of three or more cycles is LUT RAM (SRLC32E), one LUT per 32 cycles of a bit;
+      * elsewhere it is flip-flops. The triangle pipe's count holds its divider's, which the synthesis books under
+      * FpDivPipe: it goes there. Resource -> unit -> amount.
       */
-    def pipelineFf(p: PlatformParams): Map[String, Double] = if (p.stageBudget.isEmpty) Map.empty else {
-      val (b1, t1, d1) = rtaccel.iu.PipeLatencies.of(p).regBits
-      val (b0, t0, d0) = rtaccel.iu.PipeLatencies.of(p.copy(pipelining = rtaccel.config.Pipelining.Fixed)).regBits
-      val triDiv1 = d1 * (if (p.triFormat == rtaccel.fp.FpFormat.fp32) 1 else 0) // same format: the same divider
-      val triDiv0 = d0 * (if (p.triFormat == rtaccel.fp.FpFormat.fp32) 1 else 0)
-      Map("BoxPipe" -> (b1 - b0).toDouble * p.ius, "TriPipe" -> ((t1 - triDiv1) - (t0 - triDiv0)).toDouble * p.ius,
-        "FpDivPipe" -> (d1 - d0).toDouble * (rtaccel.tc.TraversalController.dividers + rtaccel.iu.TriPipe.dividers * p.ius))
+    def pipelineRegs(p: PlatformParams, fam: String): Map[String, Map[String, Double]] = if (p.stageBudget.isEmpty) Map.empty else {
+      val Seq(b1, t1, d1) = rtaccel.iu.PipeLatencies.of(p).census
+      val Seq(b0, t0, d0) = rtaccel.iu.PipeLatencies.of(p.copy(pipelining = rtaccel.config.Pipelining.Fixed)).census
+      // the cost model takes fp32 triangles only: the triangle pipe's divider is the ray preparation's
+      val perUnit = Map("BoxPipe" -> (b1 - b0) * p.ius, "TriPipe" -> ((t1 - d1) - (t0 - d0)) * p.ius,
+        "FpDivPipe" -> (d1 - d0) * (rtaccel.tc.TraversalController.dividers + rtaccel.iu.TriPipe.dividers * p.ius).toLong)
+      val srl = fam.startsWith("xc")
+      Map("ff" -> perUnit.map { case (u, c) => u -> (if (srl) c.bits - c.chainBits else c.bits).toDouble },
+        "lutram" -> perUnit.map { case (u, c) => u -> (if (srl) c.chainLuts else 0L).toDouble })
     }
     def total(p: PlatformParams, fam: String): Map[String, Double] =
       resources.map(r => r -> predict(p, fam).map(_._2(r)).sum).toMap

@@ -43,8 +43,8 @@ class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None
       val (r, v) = delay(Fp.divPost(f, st), vld, regsAfter(steps + 1))
       (r, v, stages)
   }
-  /** Flip-flop bits of the pipeline registers (the state between steps: a census for the cost model). */
-  val regBits: Long = if (budget.isDefined) pipe.regBits else stages.toLong * (new Fp.DivState(f)).getWidth
+  /** The pipeline registers (the state between steps: a census for the cost model). */
+  val census: Stager.Census = if (budget.isDefined) pipe.census else Stager.Census(stages.toLong * (new Fp.DivState(f)).getWidth)
   /** Cycles from an input to its result. */
   val latency: Int = lat
   io.out.valid := resValid

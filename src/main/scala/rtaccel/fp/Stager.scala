@@ -19,10 +19,13 @@ final case class Timed[+T <: Data](v: T, at: Int, depth: Int) {
   */
 final class Stager(val budget: Option[Int]) {
   require(budget.forall(_ >= 1), s"a pipeline budget must be at least 1 LUT level (got ${budget.get})")
-  private var bits = 0L
-  /** Flip-flop bits this Stager has placed so far (a census for the cost model; synthesis may trim unused ones). */
-  def regBits: Long = bits
-  private def count(x: Data, cycles: Int): Unit = bits += Stager.knownWidth(x).toLong * cycles
+  private var placed = Stager.Census()
+  /** The register bits this Stager has placed so far (a census for the cost model; synthesis may trim unused ones). */
+  def census: Stager.Census = placed
+  private def count(x: Data, cycles: Int): Unit = {
+    val w = Stager.knownWidth(x).toLong
+    placed = placed + (if (cycles >= Stager.ChainMin) Stager.Census(w * cycles, w * cycles, w * ((cycles + 31) / 32)) else Stager.Census(w * cycles))
+  }
   // one shift register per (value, cycle) however many operators read it there
   private val delayed = new java.util.IdentityHashMap[Data, scala.collection.mutable.Map[Int, Data]]()
 
@@ -74,6 +77,16 @@ final class Stager(val budget: Option[Int]) {
 }
 
 object Stager {
+  /** Register bits: all of them, those in delay chains of ChainMin cycles or more, and the 32-deep shift-register
+    * LUTs (Xilinx SRLC32E) such chains take when synthesis maps them into LUT RAM (make area shows it does).
+    */
+  final case class Census(bits: Long = 0, chainBits: Long = 0, chainLuts: Long = 0) {
+    def +(o: Census): Census = Census(bits + o.bits, chainBits + o.chainBits, chainLuts + o.chainLuts)
+    def -(o: Census): Census = Census(bits - o.bits, chainBits - o.chainBits, chainLuts - o.chainLuts)
+    def *(k: Long): Census = Census(bits * k, chainBits * k, chainLuts * k)
+  }
+  /** Yosys' shift-register mapping takes chains of three or more. */
+  val ChainMin = 3
   /** Bits of x whose widths Chisel knows before inference (an inferred one counts 0: the census is a floor). */
   def knownWidth(x: Data): Int = x match {
     case a: Aggregate => a.getElements.map(knownWidth).sum

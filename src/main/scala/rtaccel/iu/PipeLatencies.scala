@@ -2,15 +2,15 @@ package rtaccel.iu
 
 import chisel3._
 import rtaccel.config.PlatformParams
-import rtaccel.fp.{FpDivPipe, FpFormat}
+import rtaccel.fp.{FpDivPipe, FpFormat, Stager}
 
 /** Cycles from input to result of the fixed-latency pipes a configuration builds (they follow PIPELINE's budget):
   * the box test, the triangle test of TRI_TEST and the TC's ray preparation (1/d). The register map reports them
   * (RegMap.Pipeline), so a host or a waveform reader knows the build's depths.
-  * `regBits`: flip-flop bits of the three pipes' registers (box, tri with its divider, one ray-preparation divider),
-  * as their Stagers counted them (`of` fills them in; the board top, which needs only the latencies, leaves them 0).
+  * `census`: the three pipes' registers (box, tri with its divider, one ray-preparation divider) as their Stagers
+  * counted them (`of` fills it in; the board top, which needs only the latencies, leaves it empty).
   */
-final case class PipeLatencies(box: Int, tri: Int, prep: Int, regBits: (Long, Long, Long) = (0L, 0L, 0L))
+final case class PipeLatencies(box: Int, tri: Int, prep: Int, census: Seq[Stager.Census] = Nil)
 
 object PipeLatencies {
   private val memo = scala.collection.concurrent.TrieMap[String, PipeLatencies]()
@@ -30,10 +30,10 @@ object PipeLatencies {
   private class Probe(p: PlatformParams) extends Module {
     private val box = Module(new BoxPipe(p))
     private val (tri, triBits) = p.triTest match {
-      case rtaccel.config.TriTest.Mt => val t = Module(new TriPipe(p)); (t.latency, t.regBits)
-      case rtaccel.config.TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.latency, t.regBits)
+      case rtaccel.config.TriTest.Mt => val t = Module(new TriPipe(p)); (t.latency, t.census)
+      case rtaccel.config.TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.latency, t.census)
     }
     private val prep = Module(new FpDivPipe(FpFormat.fp32, p.divStages, p.stageBudget))
-    val latencies: PipeLatencies = PipeLatencies(box.latency, tri, prep.latency, (box.regBits, triBits, prep.regBits))
+    val latencies: PipeLatencies = PipeLatencies(box.latency, tri, prep.latency, Seq(box.census, triBits, prep.census))
   }
 }

@@ -114,6 +114,6 @@ class WatertightPipe(p: PlatformParams) extends Module {
   val latency: Int = out.at
   io.out.bits := out.v
   io.out.valid := pipe.valid(io.in.valid, latency)
-  /** Flip-flop bits of its pipeline registers, its divider's included (a census for the cost model). */
-  val regBits: Long = pipe.regBits + div.regBits
+  /** Its pipeline registers, its divider's included (a census for the cost model). */
+  val census: rtaccel.fp.Stager.Census = pipe.census + div.census
 }
