@@ -78,7 +78,8 @@ object Synthesis {
     n.toMap
   }
 
-  private def hash(files: Seq[Path], extra: String): String = {
+  /** The cache key of a circuit: its Verilog files (names and bytes) and `extra` (tools, target, recipe). */
+  private[area] def hash(files: Seq[Path], extra: String): String = {
     val md = MessageDigest.getInstance("SHA-256")
     for (f <- files.sortBy(_.getFileName.toString)) { md.update(f.getFileName.toString.getBytes); md.update(Files.readAllBytes(f)) }
     md.update(extra.getBytes)
