@@ -123,10 +123,10 @@ object Simulate {
   }
 
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
-    * build of its own instead of a stale one. The preset's name and the clock shape no circuit, so they are left out.
+    * build of its own instead of a stale one. The preset's name and the clock (and where it came from) shape no circuit, so they are left out.
     */
   def paramsDigest(p: PlatformParams): String =
-    java.security.MessageDigest.getInstance("SHA-256").digest(p.copy(name = "", clockMhz = 1).toString.getBytes("UTF-8"))
+    java.security.MessageDigest.getInstance("SHA-256").digest(p.copy(name = "", clockMhz = 1, clockSource = "").toString.getBytes("UTF-8"))
       .take(5).map(b => f"${b & 0xff}%02x").mkString
 
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
@@ -242,7 +242,7 @@ object Simulate {
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
       val json = ujson.Obj(
-        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
+        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "clock_source" -> p.clockSource, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
         "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,

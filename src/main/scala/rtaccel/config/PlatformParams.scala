@@ -131,7 +131,10 @@ final case class PlatformParams(
   // NODE_BANKS=k (k >= 1): one node cache of nodeCache.entries serves every IU, in k banks chosen by the low bits of
   // the node id, each bank a tag pipeline and data RAM of entries / k lines behind a crossbar; 0: each IU cluster has
   // a node cache of its own of nodeCache.entries (docs/caches.md, "Shared node cache")
-  nodeBanks: Int = 0
+  nodeBanks: Int = 0,
+  // where clockMhz came from: given (CLOCK_MHZ=<MHz>) | board (the catalog's, or the paper's board's with no BOARD)
+  // | proxy (make area's LUT levels) | routed (make timing); shapes no circuit (area.ClockSource)
+  clockSource: String = "board"
 ) {
   require(!respTagged || respByPath, "RESP_ORDER=tagged answers on the two path streams; set respByPath with respTagged")
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
