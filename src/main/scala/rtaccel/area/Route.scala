@@ -50,9 +50,12 @@ object Route {
   private def key(j: Job, wrap: String): String = Synthesis.hash(j.files, Seq(yosysBanner, nextpnrVersion, j.board.part,
     j.part.device, j.part.pkg, s"speed ${j.speed}", s"seed ${j.seed}", j.top, wrap, synthScript(Nil), pnrArgs(j).mkString(" ")).mkString("\n"))
 
+  /** The folder that holds (or will hold) the result of `j` under `cacheRoot`. */
+  def cacheDir(j: Job, cacheRoot: Path): Path = cacheRoot.resolve(key(j, wrapper(j)._1))
+
   /** The cached result of `j`, if there is one (CLOCK_MHZ=fmax reads it without routing). */
   def lookup(j: Job, cacheRoot: Path): Option[Routed] = {
-    val dir = cacheRoot.resolve(key(j, wrapper(j)._1))
+    val dir = cacheDir(j, cacheRoot)
     val f = dir.resolve(resultFile)
     if (Files.isRegularFile(f)) Some(Routed(ujson.read(Files.readString(f)).obj, dir, cached = true)) else None
   }

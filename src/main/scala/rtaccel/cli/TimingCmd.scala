@@ -28,7 +28,7 @@ object TimingCmd {
     val target = if (a.opt("clock-mhz").isDefined) p.clockMhz else board.clockMhz
     val cache = Paths.get(a.get("cache", "build/timing-cache"))
     val out = Paths.get(a.get("out", s"build/timing/${p.name}-${board.name}${a.opt("unit").fold("")("-" + _)}"))
-    val say = (l: String) => System.err.println(s"[timing] ${l.take(160)}")
+    val say = (l: String) => Console.err.println(s"[timing] ${l.take(160)}")
 
     // emitted beside the cache, not into OUT: a bad UNIT writes nothing
     Files.createDirectories(cache)
