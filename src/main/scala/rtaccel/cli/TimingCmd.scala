@@ -21,7 +21,10 @@ object TimingCmd {
     val seeds = a.int("seeds", 1)
     if (seeds < 1 || seeds > 32) throw new InputError(s"TIMING_SEEDS=$seeds: give 1..32 seeds")
     val speed = a.int("speed", part.speedGrade)
-    if (!Set(6, 7, 8)(speed)) throw new InputError(s"SPEED=$speed: ECP5 speed grades are 6, 7 and 8 (${board.name} is -${part.speedGrade})")
+    // nextpnr knows -6, -7 and -8 for LFE5U / LFE5UM parts and -8 alone for the 5G parts (their only grade)
+    val grades = if (part.device.startsWith("um5g")) Set(8) else Set(6, 7, 8)
+    if (!grades(speed)) throw new InputError(s"SPEED=$speed: ${board.name} (${board.part}) comes in speed grade " +
+      s"${grades.toSeq.sorted.mkString(", ")} only${if (grades.size == 1) " (nextpnr has no other for the 5G parts)" else ""}")
     val p = EmitVerilog.preset(a, "make timing")
     val unit = a.get("unit", "RtAccelTop")
     // the clock to meet: CLOCK_MHZ (a number, or fmax: a measured one) if given, else the board's

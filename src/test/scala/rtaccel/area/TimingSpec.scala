@@ -73,9 +73,9 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(code == 2 && out.isEmpty && err.contains("ECP5 parts only") && err.contains("ecp5-85") && err.contains("ecp5-45"), err)
     val (c2, o2, e2) = timing("--unit", "NoSuchUnit")
     assert(c2 == 2 && o2.isEmpty && e2.contains("UNIT=NoSuchUnit") && e2.contains("BurstSplitter") && e2.contains("RtAccelTop"), e2)
-    val (c3, _, e3) = timing("--unit", "BurstSplitter", "--speed", "5")
-    assert(c3 == 2 && e3.contains("SPEED=5"), e3)
-    for (x <- Seq(Seq("--unit", "BurstSplitter", "--board", "xc7k325t"), Seq("--unit", "NoSuchUnit"), Seq("--unit", "BurstSplitter", "--speed", "5")))
+    val (c3, _, e3) = timing("--unit", "BurstSplitter", "--speed", "6")
+    assert(c3 == 2 && e3.contains("SPEED=6") && e3.contains("speed grade 8 only"), e3)
+    for (x <- Seq(Seq("--unit", "BurstSplitter", "--board", "xc7k325t"), Seq("--unit", "NoSuchUnit"), Seq("--unit", "BurstSplitter", "--speed", "6")))
       assert(!Files.exists(dir.resolve(s"o${x.hashCode}")))
   }
 
