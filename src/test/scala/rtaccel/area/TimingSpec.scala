@@ -68,6 +68,19 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(err.contains("< target 2000.0 MHz"), err)
   }
 
+  test("a part too small is refused before routing with the resource and both numbers (exit 3), the JSON last") {
+    assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
+    val cat = dir.resolve("tiny.json")
+    Files.writeString(cat, """{"boards": {"tiny5": {"part": "a test part", "family": "ecp5", "device": "um5g-25k",
+      "package": "CABGA381", "speed_grade": 8, "lut4": 50, "ff": 100000, "mult18": 10, "ebr": 10, "dram_gbps": 1, "clock_mhz": 50}}}""")
+    val (code, out, err) = timing("--unit", "BurstSplitter", "--board", "tiny5", "--catalog", cat.toString)
+    assert(code == 3, err)
+    val j = last(out)
+    assert(!j("fits").bool && !j("met").bool && j("fmax_mhz").isNull && j("critical_path").isNull, j.toString)
+    assert(j("first_overflow")("resource").str == "lut4" && j("first_overflow")("available").num == 50 && j("first_overflow")("used").num > 50)
+    assert(err.contains("does not fit a test part: lut4") && !err.contains("[timing] nextpnr"), err)
+  }
+
   test("a board of another family, an unknown unit and a bad speed grade are refused (exit 2), nothing written") {
     val (code, out, err) = timing("--unit", "BurstSplitter", "--board", "xc7k325t")
     assert(code == 2 && out.isEmpty && err.contains("ECP5 parts only") && err.contains("ecp5-85") && err.contains("ecp5-45"), err)
