@@ -103,7 +103,7 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(Cli.makeArgs(Args(Map("config" -> "small", "tus" -> "1", "stack-depth" -> "8", "clock-mhz" -> "fmax"))) == "CONFIG=small TUS=1 STACK=8")
   }
 
-  test("CLOCK_MHZ=fmax: refused with the make command when nothing is cached, the routed clock when it is") {
+  test("CLOCK_MHZ=fmax: refused with the make command when nothing is cached, the routed clock (ECP5) or the proxy (Xilinx) when it is") {
     assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
     val p = EmitVerilog.preset(Args(Map("config" -> "small", "tus" -> "1")), "test")
     val board = Boards.byName("ecp5-85")
@@ -120,5 +120,14 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     Files.createDirectories(d)
     Files.writeString(d.resolve(Route.resultFile), """{"fits": true, "fmax_mhz": 42.5}""")
     assert(ClockSource.resolve(p, board, "CONFIG=small TUS=1", root, root) == (42.5, "routed"))
+    // on a Xilinx board, make area's proxy: a synthesis of the same circuit planted in its cache (7 LUT levels)
+    if ((scala.sys.process.Process(Seq("sh", "-c", "command -v yosys")) ! scala.sys.process.ProcessLogger(_ => ())) == 0) {
+      val s = Synthesis.cacheDir(files, "RtAccelTop", "xc7", root)
+      Files.createDirectories(s)
+      Files.writeString(s.resolve(Yosys.statFile), """{"modules": {"RtAccelTop": {"num_cells_by_type": {"LUT6": 5}}}}""")
+      Files.writeString(s.resolve(Synthesis.levelsFile), """{"modules": {"RtAccelTop": 7}}""")
+      Files.writeString(s.resolve(Yosys.ltpFile), "")
+      assert(ClockSource.resolve(p, Boards.byName("xc7k325t"), "CONFIG=small TUS=1", root, root) == (Timing.forFamily("xc7").fmaxMhz(7), "proxy"))
+    }
   }
 }
