@@ -57,7 +57,9 @@ object Tools {
     * with "call stack exhausted". */
   def yowasp(tool: String): Seq[String] = {
     venv(s"yowasp-$tool") // present, or the error that says how to install it
-    Seq(venv("python"), Paths.get("tools/yowasp_stack.py").toAbsolutePath.toString, tool)
+    val launcher = Paths.get("tools/yowasp_stack.py").toAbsolutePath
+    if (!Files.isRegularFile(launcher)) throw new InputError(s"$launcher not found; run from the project root")
+    Seq(venv("python"), launcher.toString, tool)
   }
 
   /** A tool of the project's Python environment (.venv, from requirements.txt; RTACCEL_VENV names another one). */
