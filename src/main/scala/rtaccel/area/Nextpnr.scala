@@ -21,9 +21,12 @@ object Nextpnr {
   }
 
   /** The phase of a running nextpnr from its log ("Info: Routing..", "Info: Running placer."), for progress. */
-  def phase(log: Path): String =
-    Tools.lastLine(log, l => l.matches("""Info: (Packing|Running|Routing|Placing|Setting|Promoting|Checksum|Max frequency|Critical|Program).*""") ||
+  def phase(log: Path): String = {
+    val l = Tools.lastLine(log, l => l.matches("""Info: (Packing|Running|Routing|Placing|Setting|Promoting|Checksum|Max frequency|Critical|Program).*""") ||
       l.matches("""Info:\s+\d+ \|.*"""), "starting")
+    // the router's table row: iterations | arcs routed, ripped up | ... ; named, or it reads as noise
+    if (l.matches("""Info:\s+\d+ \|.*""")) s"routing (iteration | arcs | ...): ${l.stripPrefix("Info:").trim}" else l
+  }
 
   private val lutLine = """Info:\s+Total LUT4s:\s+(\d+)/(\d+).*""".r
   private val ffLine = """Info:\s+Total DFFs:\s+(\d+)/(\d+).*""".r
