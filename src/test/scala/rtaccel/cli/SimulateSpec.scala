@@ -24,7 +24,7 @@ class SimulateSpec extends AnyFunSuite {
     val d = Simulate.paramsDigest(p)
     assert(d.matches("[0-9a-f]{10}"), d)
     assert(Simulate.paramsDigest(PlatformParams(tus = 4)) == d) // stable: the same parameters, the same build
-    assert(Simulate.paramsDigest(p.copy(name = "mine", clockMhz = 200)) == d)
+    assert(Simulate.paramsDigest(p.copy(name = "mine", clockMhz = 200, clockSource = "routed")) == d)
     val changed = Seq(p.copy(rayStore = true), p.copy(tagForward = true), p.copy(nodeCache = CacheParams(64, 1, CachePolicy.Dm), respByPath = true, respTagged = true, nodeBanks = 2), p.copy(tus = 8), p.copy(hw = p.hw.copy(cacheHitQueue = 8)),
       p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lru)), p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lrp)),
       p.copy(boxFormat = rtaccel.fp.FpFormat(8, 7)), p.copy(triTest = rtaccel.config.TriTest.Watertight))
@@ -49,6 +49,7 @@ class SimulateSpec extends AnyFunSuite {
     val j = last(stdout)
     assert(j("ok").bool && j("failures").arr.isEmpty && j("status")("done").bool && !j("status")("busy").bool)
     assert(j("irq_done").bool && j("counters")("hits_out").num == 60 && j("counters")("rays_in").num == 60)
+    assert(j("clock_mhz").num == 150 && j("clock_source").str == "board", "the preset's clock is the paper board's")
     // the roofline of the run: its own rays/s, and no run beats either bound (each is a true ceiling of the RTL)
     val r = j("roofline")
     assert(r("rays_per_s").num == j("rays_per_s_at_clock").num)
