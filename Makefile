@@ -32,10 +32,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator z3 run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area area-fp cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity paper
+        yosys verilog area area-fp timing cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity paper
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity | paper   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | timing | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity | paper   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -183,6 +183,15 @@ verilog: deps
 area: deps yosys
 	@$(JAVA) rtaccel.cli.Area --config $(VCONFIG) $(PLATFORM_KNOBS) \
 	  $(if $(FIDELITY),--fidelity $(FIDELITY)) $(if $(UNIT),--unit $(UNIT)) $(if $(OUT),--out $(OUT))
+
+# Routed timing on an ECP5 board (docs/area.md "Routed timing"): yowasp synth_ecp5 + nextpnr-ecp5 (from .venv) of
+# the board top or UNIT=<module> in a shift-register wrapper; JSON last line, timing.json + nextpnr log in OUT
+# (default build/timing/<config>-<board>[-<unit>]); exit 3 when fmax < CLOCK_MHZ (else the board's clock) or the
+# design does not fit. Cached per circuit and seed in build/timing-cache. SPEED=6|7|8 overrides the part's grade.
+TIMING_SEEDS ?= 1
+timing: deps
+	@$(JAVA) rtaccel.cli.TimingCmd --config $(VCONFIG) $(PLATFORM_KNOBS) --seeds $(TIMING_SEEDS) \
+	  $(if $(UNIT),--unit $(UNIT)) $(if $(SPEED),--speed $(SPEED)) $(if $(OUT),--out $(OUT))
 
 # The fitted cost model (FIDELITY=model) from the syntheses of boards/cost-calibration.json (cached per circuit);
 # writes boards/cost-model.json with its error on the validation configurations.

@@ -37,9 +37,8 @@ object Synthesis {
   def run(files: Seq[Path], top: String, family: String, cacheRoot: Path, what: String, say: String => Unit,
           rtaccelVersion: String, cachedOnly: Boolean = false): Synthesis = {
     val version = Yosys.version()
-    val modules = files.map(_.getFileName.toString.replaceAll("""\.s?v$""", ""))
-    val recipe = Yosys.recipe(family, top, modules)
-    val dir = cacheRoot.resolve(hash(files, s"$version $family $top\n$recipe"))
+    val dir = cacheDir(files, top, family, cacheRoot)
+    val recipe = Yosys.recipe(family, top, modules(files))
     val stat = dir.resolve(Yosys.statFile)
     val cached = Files.isRegularFile(stat)
     if (!cached && cachedOnly) throw new NotCached(s"$what for $family")
@@ -70,6 +69,12 @@ object Synthesis {
 
   val levelsFile = "levels.json"
 
+  private def modules(files: Seq[Path]): Seq[String] = files.map(_.getFileName.toString.replaceAll("""\.s?v$""", ""))
+
+  /** The folder of the synthesis of `files` with `top` for `family` (the key: see `run`). */
+  def cacheDir(files: Seq[Path], top: String, family: String, cacheRoot: Path): Path =
+    cacheRoot.resolve(hash(files, s"${Yosys.version()} $family $top\n${Yosys.recipe(family, top, modules(files))}"))
+
   /** How many times each module is instantiated in the design under `top` (top itself once). */
   def countInstances(mods: Map[String, Map[String, Long]], top: String): Map[String, Long] = {
     val n = mutable.Map[String, Long]().withDefaultValue(0L)
@@ -78,7 +83,8 @@ object Synthesis {
     n.toMap
   }
 
-  private def hash(files: Seq[Path], extra: String): String = {
+  /** The cache key of a circuit: its Verilog files (names and bytes) and `extra` (tools, target, recipe). */
+  private[area] def hash(files: Seq[Path], extra: String): String = {
     val md = MessageDigest.getInstance("SHA-256")
     for (f <- files.sortBy(_.getFileName.toString)) { md.update(f.getFileName.toString.getBytes); md.update(Files.readAllBytes(f)) }
     md.update(extra.getBytes)

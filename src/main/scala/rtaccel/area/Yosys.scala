@@ -45,19 +45,9 @@ object Yosys {
   def synthesize(files: Seq[Path], recipe: String, dir: Path, what: String, progress: String => Unit): Unit = {
     val script = s"read_verilog -sv ${files.map(_.toAbsolutePath.toString).mkString(" ")}; $recipe"
     val log = dir.toAbsolutePath.resolve(logFile)
-    // warnings stay in the log; errors are shown as they come
-    val proc = Process(Seq("yosys", "-q", "-l", log.toString, "-p", script), dir.toFile).run(ProcessLogger(
-      l => if (l.contains("ERROR")) progress(l), l => if (l.contains("ERROR")) progress(l)))
-    // heartbeat: the pass Yosys is in, from its log, every 30 s (-q keeps the terminal otherwise quiet)
-    val t0 = System.nanoTime(); var beat = t0
-    while (proc.isAlive()) {
-      Thread.sleep(500)
-      if (System.nanoTime() - beat > 30e9) {
-        beat = System.nanoTime()
-        progress(f"${(beat - t0) / 1e9}%.0f s, ${currentPass(log)}")
-      }
-    }
-    val code = proc.exitValue()
+    // warnings stay in the log; errors are shown as they come; every 30 s the pass Yosys is in
+    // (-q keeps the terminal otherwise quiet)
+    val code = Tools.run(Seq("yosys", "-q", "-l", log.toString, "-p", script), dir, progress, () => currentPass(log))
     if (code != 0 || !Files.isRegularFile(dir.resolve(statFile)) || !Files.isRegularFile(dir.resolve(netlistFile))) {
       val tail = if (Files.exists(log)) Files.readAllLines(log).toArray.takeRight(5).mkString(" | ") else ""
       throw new InputError(s"yosys failed (status $code) on $what: $tail (log: $log)")
@@ -65,15 +55,8 @@ object Yosys {
   }
 
   /** The last numbered pass line of a Yosys log ("25.41. Executing ABC pass ..."), for progress reports. */
-  private def currentPass(log: Path): String = {
-    if (!Files.exists(log)) return "starting"
-    val r = new java.io.RandomAccessFile(log.toFile, "r")
-    try {
-      val n = math.min(r.length, 65536L); r.seek(r.length - n)
-      val buf = new Array[Byte](n.toInt); r.readFully(buf)
-      new String(buf, "latin1").split("\n").reverseIterator.map(_.trim).find(_.matches("""\d+(\.\d+)*\. .*""")).getOrElse("running")
-    } finally r.close()
-  }
+  private[area] def currentPass(log: Path): String =
+    Tools.lastLine(log, _.matches("""\d+(\.\d+)*\. .*"""), if (Files.exists(log)) "running" else "starting")
 
   /** Cell counts by type of every module in a `stat -json` file (module names without Yosys' escape). */
   def modules(statJson: Path): Map[String, Map[String, Long]] = {

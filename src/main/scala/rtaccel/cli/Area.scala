@@ -20,7 +20,7 @@ object Area {
     val fidelity = a.get("fidelity", "yosys")
     if (fidelity != "yosys" && fidelity != "model")
       throw new InputError(s"FIDELITY=$fidelity is not one of yosys (a real synthesis) or model (the fitted cost model, boards/cost-model.json)")
-    val board = Boards.byName(a.get("board", "xc5vlx330t"), a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath))
+    val board = Boards.requireXilinx(Boards.byName(a.get("board", "xc5vlx330t"), a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath)), "make area")
     // (the board's memory and clock reach the configuration through Cli.params as for every command)
     val p = EmitVerilog.preset(a, "make area")
     val out = Paths.get(a.get("out", s"build/area/${p.name}-${board.name}"))

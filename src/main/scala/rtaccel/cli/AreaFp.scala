@@ -14,7 +14,7 @@ object AreaFp {
 
   def main0(a: Args): Unit = {
     val t0 = System.nanoTime()
-    val board = Boards.byName(a.get("board", "xc5vlx330t"), a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath))
+    val board = Boards.requireXilinx(Boards.byName(a.get("board", "xc5vlx330t"), a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath)), "make area-fp")
     val ops = a.opt("ops").map(_.split(",").map(_.trim).filter(_.nonEmpty).toSeq.distinct.map(FpProbe.byName)).getOrElse(FpProbe.ops)
     if (ops.isEmpty) throw new rtaccel.io.InputError(s"OPS= names no operation; choose from ${FpProbe.ops.map(_.name).mkString(", ")}")
     val timing = Timing.forFamily(board.family)

@@ -80,6 +80,7 @@ object CacheSim {
       "bandwidth_bound_rays_per_s" -> bound(nodeBpr + primBpr),
       "bandwidth_bound_rays_per_s_nocache" -> bound(nodeBprNoCache + primBprNoCache),
       "bandwidth_bound_note" -> "clock x sustained DRAM bytes/cycle / DRAM bytes per ray; ignores compute and latency limits",
+      "clock_mhz" -> p.clockMhz, "clock_source" -> p.clockSource, "pipeline" -> rtaccel.config.Pipelining.json(p),
       "predicted_rays_per_s" -> pred.raysPerCycle * p.cyclesPerSecond,
       "predicted_rays_per_s_no_hol" -> pred.raysPerCycleNoHol * p.cyclesPerSecond,
       "predicted_cycles_per_ray" -> ujson.Obj("latency_one_tu" -> pred.latencyCycles, "dram" -> pred.dramCycles, "beats" -> pred.beatCycles,

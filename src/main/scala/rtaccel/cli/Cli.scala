@@ -41,12 +41,14 @@ object Cli {
     // BOARD= brings its memory bandwidth and clock; MEM_GBPS= / CLOCK_MHZ= override either
     val board = a.opt("board").map(b => rtaccel.area.Boards.byName(b, a.opt("catalog").map(Paths.get(_)).getOrElse(rtaccel.area.Boards.defaultPath)))
     val gbps = a.opt("mem-gbps").map(_ => a.double("mem-gbps", 0)).orElse(board.map(_.dramGbps))
-    val mhz = a.opt("clock-mhz").map(_ => a.double("clock-mhz", 0)).orElse(board.map(_.clockMhz))
+    // CLOCK_MHZ=fmax is resolved below, once the circuit is known; a preset's own clock is its paper board's
+    val fmax = a.opt("clock-mhz").contains("fmax")
+    val mhz = a.opt("clock-mhz").filter(_ => !fmax).map(_ => a.double("clock-mhz", 0) -> "given").orElse(board.map(_.clockMhz -> "board"))
     val base = preset.copy(memory = gbps.fold(preset.memory)(g => preset.memory.copy(bytesPerSecond = g * 1e9)),
-      clockMhz = mhz.getOrElse(preset.clockMhz), family = board.map(_.family).getOrElse(preset.family),
+      clockMhz = mhz.fold(preset.clockMhz)(_._1), clockSource = mhz.fold("board")(_._2), family = board.map(_.family).getOrElse(preset.family),
       pipelining = a.opt("pipeline").map(Pipelining.parse).getOrElse(preset.pipelining))
     val respOrder = a.opt("resp-order").map(RespOrder.parse)
-    base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus), ius = a.int("ius", base.ius), memChannels = a.int("mem-channels", base.memChannels),
+    val p = base.copy(m = a.int("m", base.m), mppl = a.int("mppl", base.mppl), tus = a.int("tus", base.tus), ius = a.int("ius", base.ius), memChannels = a.int("mem-channels", base.memChannels),
       respByPath = respOrder.fold(base.respByPath)(_ != RespOrder.Request),
       respTagged = respOrder.fold(base.respTagged)(_ == RespOrder.Tagged),
       rayStore = a.switch("ray-store", "RAY_STORE", base.rayStore,
@@ -66,6 +68,27 @@ object Cli {
       nodeQuantBits = a.opt("node-format").filter(_ != "fit").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
       primPacked = a.opt("prim-format").map(Numerics.parsePrimFormat).getOrElse(base.primPacked),
       nodeCache = cacheArg(a, "node", base.nodeCache), primCache = cacheArg(a, "prim", base.primCache))
+    if (!fmax) p
+    else {
+      if (cfg == "fit") throw new InputError("CLOCK_MHZ=fmax needs CONFIG=<preset>: a fitted configuration's circuit depends on the scene, " +
+        "so no routed or synthesized clock of it can be cached; give CONFIG=paper2017 (or another preset) or CLOCK_MHZ=<MHz>")
+      val b = board.getOrElse(rtaccel.area.Boards.byName("xc5vlx330t", a.opt("catalog").map(Paths.get(_)).getOrElse(rtaccel.area.Boards.defaultPath)))
+      val (f, src) = rtaccel.area.ClockSource.resolve(p, b, makeArgs(a))
+      Console.err.println(f"[clock] CLOCK_MHZ=fmax: $f%.1f MHz ($src, ${b.name})")
+      // the circuit stays the one built for the target clock (PIPELINE=auto's budget), now timed at its measured clock
+      p.copy(clockMhz = f, clockSource = src, pipelineMhz = Some(p.pipelineMhz.getOrElse(p.clockMhz)))
+    }
+  }
+
+  /** The platform knobs of `a` as the make variables that set them (CONFIG first; BOARD and CLOCK_MHZ left out),
+    * for a message that names the command to run. */
+  def makeArgs(a: Args): String = {
+    val skip = Set("config", "board", "clock-mhz", "catalog", "node-bytes", "prim-bytes")
+    val knobs = Flags.platform.map(_.name).filterNot(skip).flatMap(n => a.opt(n).map { v =>
+      val name = if (n == "stack-depth") "STACK" else n.toUpperCase.replace('-', '_')
+      s"$name=$v"
+    })
+    (s"CONFIG=${a.get("config", "fit")}" +: knobs).mkString(" ")
   }
 
   /** NODE_CACHE/NODE_WAYS/NODE_POLICY (or PRIM_...) and MAX_LEVEL over the preset's cache `base`. Without

@@ -33,7 +33,7 @@ object CostFit {
     if (!Files.isRegularFile(planPath)) throw new InputError(s"calibration plan $planPath not found")
     val plan = try ujson.read(Files.readString(planPath)) catch { case e: ujson.ParseException => throw new InputError(s"$planPath is not JSON: ${e.getMessage}") }
     val family = plan("family").str
-    if (!Boards.families(family)) throw new InputError(s"$planPath: family '$family' is not one of ${Boards.families.toSeq.sorted.mkString(", ")}")
+    if (!Boards.xilinxFamilies(family)) throw new InputError(s"$planPath: family '$family' is not one of ${Boards.xilinxFamilies.toSeq.sorted.mkString(", ")}")
     val cache = Paths.get(a.get("cache", "build/area-cache"))
     val rtl = Paths.get("build/cost-model/rtl")
     val train = points(plan, "train", family, planPath); val validate = points(plan, "validate", family, planPath)

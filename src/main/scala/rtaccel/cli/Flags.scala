@@ -67,6 +67,10 @@ object Flags {
   val costFit: Seq[Flag] = Seq(f("calibration", "calibration plan (boards/cost-calibration.json)"), f("out", "fitted model file"),
     f("cache", "synthesis cache folder"), f("catalog", "board catalog file"), f("cached-only", "1: fit from the cached syntheses only, leaving out the others"))
   val maxTus: Seq[Flag] = area ++ Seq(f("confirm", "1 (default) confirms the answer with one real synthesis"), f("max", "largest TU count tried"))
+  val timing: Seq[Flag] = verilog ++ Seq(f("unit", "one module routed alone inside the timing wrapper instead of the board top (UNIT=)"),
+    f("cache", "routing cache folder (default build/timing-cache)"),
+    f("seeds", "nextpnr seeds 1..N, the median run reported (TIMING_SEEDS=, default 1)"),
+    f("speed", "ECP5 speed grade 6, 7 or 8 (SPEED=; default the board's)"))
   val areaFp: Seq[Flag] = model.filter(fl => Set("board", "catalog", "pipeline", "clock-mhz")(fl.name)) ++ Seq(
     f("ops", "fp32 operations to synthesize, comma-separated (OPS=; default all)"), f("out", "output folder"),
     f("cache", "synthesis cache folder"))

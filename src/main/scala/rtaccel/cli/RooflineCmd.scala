@@ -6,7 +6,8 @@ import rtaccel.perf.Roofline
 /** make roofline: RTL runs (Simulate, each checked against the model) of one configuration or of a TUS list,
   * each set against its memory and compute bounds (rtaccel.perf.Roofline, docs/roofline.md). Writes
   * OUT/roofline.csv (plotted by dse.plot_roofline) and prints, last, one JSON line: the roofline of the last
-  * configuration (rays_per_s, memory_bound, compute_bound, roofline_fraction, binding, ...) and "points", all of them.
+  * configuration (rays_per_s, memory_bound, compute_bound, roofline_fraction, binding, ...), the clock it assumes with
+  * clock_source (given, board, proxy or routed: area.ClockSource) and "points", all of them.
   */
 object RooflineCmd {
   val columns: Seq[String] = Seq("tus", "rays", "cycles", "rays_per_s", "memory_bound", "compute_bound", "compute_bound_box",
@@ -68,7 +69,7 @@ object RooflineCmd {
     val p = base
     val res = Roofline.resources(p)
     val sb = new StringBuilder(s"# scene=$label triangles=${scene.triangles} rays=${rays.count} config=${p.name} M=${p.m} " +
-      s"MPPL=${p.mppl} clock_mhz=${p.clockMhz} mem_bytes_per_s=${p.memory.bytesPerSecond} sustained=${p.memory.sustainedEfficiency} " +
+      s"MPPL=${p.mppl} clock_mhz=${p.clockMhz} clock_source=${p.clockSource} mem_bytes_per_s=${p.memory.bytesPerSecond} sustained=${p.memory.sustainedEfficiency} " +
       s"ius=${list.map(_._2).distinct.mkString(",")} mem_channels=${res.memChannels} resp_order=${p.respOrder} ray_store=${if (p.rayStore) 1 else 0} tag_forward=${if (p.tagForward) 1 else 0} node_banks=${p.nodeBanks} node_cache=${SweepTus.desc(p.nodeCache)} prim_cache=${SweepTus.desc(p.primCache)} " +
       s"binds_at=${Roofline.bindsAt} rtaccel=${Cli.version}\n")
     sb ++= columns.mkString(",") + "\n"
@@ -77,7 +78,7 @@ object RooflineCmd {
     Cli.writeText(csv, sb.toString)
     val last = points.last
     val j = ujson.Obj.from(last.value.toSeq ++ Seq("scene" -> ujson.Str(label), "config" -> ujson.Str(p.name),
-      "csv" -> ujson.Str(csv.toString), "png" -> ujson.Str(out.resolve("roofline.png").toString),
+      "clock_mhz" -> ujson.Num(p.clockMhz), "clock_source" -> ujson.Str(p.clockSource), "csv" -> ujson.Str(csv.toString), "png" -> ujson.Str(out.resolve("roofline.png").toString),
       "points" -> ujson.Arr.from(points), "rtaccel" -> ujson.Str(Cli.version)))
     println(ujson.write(j))
   }

@@ -123,12 +123,13 @@ object Simulate {
   }
 
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
-    * build of its own instead of a stale one. The preset's name shapes no circuit, so it is left out.
+    * build of its own instead of a stale one. The preset's name and where the clock came from shape no circuit, so they
+    * are left out.
     */
   def paramsDigest(p: PlatformParams): String =
     // the clock and family shape the circuit only through PIPELINE's budget, which is hashed in their place
-    java.security.MessageDigest.getInstance("SHA-256").digest((p.copy(name = "", clockMhz = 1, family = "").toString +
-      s" budget ${p.stageBudget}").getBytes("UTF-8"))
+    java.security.MessageDigest.getInstance("SHA-256").digest((p.copy(name = "", clockMhz = 1, clockSource = "", family = "",
+      pipelineMhz = None).toString + s" budget ${p.stageBudget}").getBytes("UTF-8"))
       .take(5).map(b => f"${b & 0xff}%02x").mkString
 
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
@@ -244,7 +245,7 @@ object Simulate {
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
       val json = ujson.Obj(
-        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
+        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "clock_source" -> p.clockSource, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
         "pipeline" -> rtaccel.config.Pipelining.json(p),
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
         "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,

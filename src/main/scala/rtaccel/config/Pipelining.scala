@@ -33,7 +33,7 @@ object Pipelining {
   /** What every JSON line that describes a circuit records of its pipelining. */
   def json(p: PlatformParams): ujson.Obj = ujson.Obj("mode" -> p.pipelining.name,
     "budget_levels" -> p.stageBudget.fold[ujson.Value](ujson.Null)(n => ujson.Num(n)),
-    "family" -> p.family, "for_mhz" -> p.clockMhz)
+    "family" -> p.family, "for_mhz" -> ujson.Num(p.pipelineMhz.getOrElse(p.clockMhz)))
 
   def parse(s: String): Pipelining = s.toLowerCase match {
     case "auto" => Auto

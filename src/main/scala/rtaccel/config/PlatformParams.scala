@@ -133,10 +133,16 @@ final case class PlatformParams(
   // a node cache of its own of nodeCache.entries (docs/caches.md, "Shared node cache")
   nodeBanks: Int = 0,
   // PIPELINE: LUT levels allowed between two registers of the datapaths (fp operators, IU pipes, the TC's ray
-  // preparation): auto = what clockMhz leaves on `family` (docs/timing.md); none = the fixed stages
+  // preparation): auto = what the target clock leaves on `family` (docs/timing.md); none = the fixed stages
   pipelining: Pipelining = Pipelining.Auto,
   // the FPGA family the pipelining budget is reckoned for: BOARD='s, else the paper's Virtex-5
-  family: String = "xc5v"
+  family: String = "xc5v",
+  // the target clock of PIPELINE=auto when it is not clockMhz: with CLOCK_MHZ=fmax the circuit is built for the
+  // board's clock and then runs at the clock measured for it
+  pipelineMhz: Option[Double] = None,
+  // where clockMhz came from: given (CLOCK_MHZ=<MHz>) | board (the catalog's, or the paper's board's with no BOARD)
+  // | proxy (make area's LUT levels) | routed (make timing); shapes no circuit (area.ClockSource)
+  clockSource: String = "board"
 ) {
   require(!respTagged || respByPath, "RESP_ORDER=tagged answers on the two path streams; set respByPath with respTagged")
   require(triFormat.holds(rtaccel.fp.FpFormat.fp32),
@@ -242,7 +248,7 @@ final case class PlatformParams(
     * cluster, then one per node bank */
   val memControllers: Int = ius + nodeBanks
   /** PIPELINE's budget: LUT levels at most between two registers of a datapath (None: the fixed stages). */
-  lazy val stageBudget: Option[Int] = pipelining.budget(family, clockMhz)
+  lazy val stageBudget: Option[Int] = pipelining.budget(family, pipelineMhz.getOrElse(clockMhz))
   /** A register placer for one module's datapath at this budget (each module takes its own). */
   def pipe: rtaccel.fp.Stager = new rtaccel.fp.Stager(stageBudget)
   val cyclesPerSecond: Double = clockMhz * 1e6

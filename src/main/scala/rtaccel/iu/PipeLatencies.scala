@@ -26,6 +26,14 @@ object PipeLatencies {
     })
   }
 
+  /** Cycles PIPELINE adds to a node test and to a leaf's triangle tests over the fixed stages (0, 0 at none): what the
+    * throughput model (cache.Throughput), calibrated at the fixed stages, adds to a ray's latency.
+    */
+  def extraOverFixed(p: PlatformParams): (Int, Int) = if (p.stageBudget.isEmpty) (0, 0) else {
+    val l = of(p); val f = of(p.copy(pipelining = rtaccel.config.Pipelining.Fixed))
+    (l.box - f.box, l.tri - f.tri)
+  }
+
   /** The three pipes side by side, inputs left open: elaborated for their latencies only, never emitted. */
   private class Probe(p: PlatformParams) extends Module {
     private val box = Module(new BoxPipe(p))

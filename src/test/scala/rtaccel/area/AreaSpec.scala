@@ -56,6 +56,8 @@ class AreaSpec extends AnyFunSuite {
   test("a BOARD not in the catalog is refused with the catalog's names (exit 2)") {
     val (code, out, err) = area("--board", "xc7z999")
     assert(code == 2 && out.isEmpty && err.contains("unknown BOARD 'xc7z999'") && err.contains("xc5vlx330t") && err.contains("u250"), err)
+    val (c1, o1, e1) = area("--board", "ecp5-85")
+    assert(c1 == 2 && o1.isEmpty && e1.contains("use make timing BOARD=ecp5-85"), e1) // ECP5: make timing's
     val (c2, _, e2) = area("--fidelity", "fast")
     assert(c2 == 2 && e2.contains("FIDELITY=fast is not one of yosys") && e2.contains("model"), e2)
   }

@@ -151,7 +151,9 @@ class CostModelSpec extends AnyFunSuite {
     info(s"paper2017 (2^13 DM node cache): $n TUs on a Kintex-7 325T, ${two("max_tus").num.toInt} on twice its resources")
     assert(n >= 1 && two("max_tus").num > n && one("confirmed").isNull)
     val b = Boards.byName("k7", cat)
-    val at = (t: Int) => Area.fits(ujson.Obj.from(model.total(Presets.paper2017.copy(tus = t), b.family).map { case (k, v) => k -> ujson.Num(v) }), b)
+    // as make max-tus builds it: the board's family and clock (PIPELINE=auto's budget follows them)
+    val at = (t: Int) => Area.fits(ujson.Obj.from(model.total(Presets.paper2017.copy(tus = t, family = b.family, clockMhz = b.clockMhz), b.family)
+      .map { case (k, v) => k -> ujson.Num(v) }), b)
     assert(at(n).isEmpty && at(n + 1).nonEmpty && one("limit")("tus").num == n + 1)
     val (c3, _, e3) = run(MaxTus.main0, Flags.maxTus, "--config", "paper2017", "--board", "xc7a100t", "--confirm", "0")
     assert(c3 == 3 && e3.contains("not even 1 TU"), e3)
@@ -159,7 +161,9 @@ class CostModelSpec extends AnyFunSuite {
     val (c4, o4, e4) = run(MaxTus.main0, Flags.maxTus, "--config", "paper2017", "--ius", "2", "--board", "k7x2", "--catalog", cat.toString, "--confirm", "0")
     assert(c4 == 0, e4)
     val n2 = last(o4)("max_tus").num.toInt
-    val at2 = (t: Int) => Area.fits(ujson.Obj.from(model.total(Presets.paper2017.copy(tus = t, ius = 2), b.family).map { case (k, v) => k -> ujson.Num(v) }), Boards.byName("k7x2", cat))
+    val b2 = Boards.byName("k7x2", cat)
+    val at2 = (t: Int) => Area.fits(ujson.Obj.from(model.total(Presets.paper2017.copy(tus = t, ius = 2, family = b2.family, clockMhz = b2.clockMhz), b.family)
+      .map { case (k, v) => k -> ujson.Num(v) }), b2)
     info(s"IUS=2: $n2 TUs on twice a Kintex-7 325T")
     assert(n2 % 2 == 0 && n2 >= 2 && at2(n2).isEmpty && at2(n2 + 2).nonEmpty && last(o4)("limit")("tus").num == n2 + 2)
   }

@@ -17,7 +17,8 @@ class ThroughputSpec extends AnyFunSuite {
   }
 
   test("latency and demands from the replay: uncached stream by hand, and a cache adds its path latency") {
-    val p = Presets.paper2017 // 128 B nodes, 64 B primitives, 40 cycles latency, 4 B/cycle sustained, 32 B beats
+    // 128 B nodes, 64 B primitives, 40 cycles latency, 4 B/cycle sustained, 32 B beats; the fixed stages (the fit's)
+    val p = Presets.paper2017.copy(pipelining = rtaccel.config.Pipelining.Fixed)
     def sink(cached: Boolean) = {
       val s = new CacheSink(if (cached) Some(new CacheModel(CacheParams(8, 1, CachePolicy.Dm), LevelPolicy.paper)) else None, None, 128, c => c * 64L)
       for (r <- 0 until 2) { s.node(r, 0, 0); s.node(r, 1, 1); s.leaf(r, 0, 3, 2) } // 2 rays: 2 nodes + a 3-prim leaf each
@@ -29,6 +30,10 @@ class ThroughputSpec extends AnyFunSuite {
     assert(u.dramCycles == (2 * 128 + 192) / 4.0)
     assert(u.beatCycles == (2 * 128 + 192) / 32.0)
     assert(math.abs(u.raysPerCycle - 1 / 232.0) < 1e-15)
+    // PIPELINE=auto: every node test takes the box pipe's extra cycles, every leaf the triangle pipe's (2 + 1 per ray)
+    val (bx, tx) = rtaccel.iu.PipeLatencies.extraOverFixed(Presets.paper2017)
+    assert(bx > 0 && tx > 0)
+    assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx)
     // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:
     // (2 x 232 - 2 x 72 + 2 x 4 + 4 x path) / 2, by hand for two path latencies
     for ((path, expect) <- Seq(8.0 -> 180.0, 5.0 -> 174.0)) {

