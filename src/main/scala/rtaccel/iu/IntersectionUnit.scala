@@ -39,7 +39,8 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   private val primFlagBit = p.refs.refBits - 1
 
   // ---- arbitration and issue: a request goes to memory and its context to the job FIFO together
-  val arb = Module(new RRArbiter(new IuReq(p), requesters))
+  // a tree of small arbiters with queues between its levels (PIPELINE), one RRArbiter without a budget
+  val arb = Module(new rtaccel.arb.TreeArbiter(new IuReq(p), requesters, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, requesters)))
   arb.io.in <> io.req
   class Job extends Bundle {
     val tu = UInt(p.tuBits.W)
