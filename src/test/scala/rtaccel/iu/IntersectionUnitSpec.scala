@@ -59,7 +59,10 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   private def run(img: MemoryImage, beatBits: Int, requests: Int, seed: Long, errPercent: Int, order: String = RespOrder.Request,
       rayStore: Boolean = false): Stats = {
     val respByPath = order != RespOrder.Request; val tagged = order == RespOrder.Tagged
-    val p = img.p.copy(respByPath = respByPath, respTagged = tagged, rayStore = rayStore)
+    // PIPELINE=none: the monitor below pairs each memory request with the TU port taken in the same cycle, which holds
+    // for the flat arbiter; the tree of PIPELINE's budget (queues between its levels) is checked by TreeArbiterSpec
+    // and end to end by PlatformSpec, the pipes at every depth by IuPipesSpec
+    val p = img.p.copy(respByPath = respByPath, respTagged = tagged, rayStore = rayStore, pipelining = rtaccel.config.Pipelining.Fixed)
     val rnd = new Random(seed)
     val codec = new RefCodec(p.refs)
     val m = p.m
