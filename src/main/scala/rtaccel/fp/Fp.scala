@@ -443,19 +443,12 @@ object Fp {
   /** Number of recurrence steps: m+1 significand bits, a guard bit and one bit for the quotient's range (1/2, 2). */
   def divSteps(f: FpFormat): Int = f.manBits + 3
 
-  /** divPre after the leading-zero counts: the operands' significands, their counts and the exponent before
-    * normalising.
+  /** divPre after the leading-zero counts: a DivState whose rem and divisor hold the operands' significands before
+    * normalising and whose exp is their exponents' difference, with the two counts.
     */
-  class DivPreMid(val f: FpFormat) extends Bundle {
-    val resNaN = Bool()
-    val resInf = Bool()
-    val resZero = Bool()
-    val sign = Bool()
-    val exp = SInt(expW(f).W)
-    val sigA = UInt((f.manBits + 1).W)
-    val sigB = UInt((f.manBits + 1).W)
-    val lzA = UInt(log2Ceil(f.manBits + 1).W)
-    val lzB = UInt(log2Ceil(f.manBits + 1).W)
+  class DivPreMid(f0: FpFormat) extends DivState(f0) {
+    val lzA = UInt(log2Ceil(f0.manBits + 1).W)
+    val lzB = UInt(log2Ceil(f0.manBits + 1).W)
   }
 
   /** divPre's first half: classes, the result's sign and the leading zeros of both significands. */
@@ -471,7 +464,7 @@ object Fp {
     s.resZero := !isNaN && !isInf && isZero
     s.sign := ua.sign ^ ub.sign
     s.exp := ua.exp.zext.pad(expW(f)) - ub.exp.zext.pad(expW(f)) + f.bias.S
-    s.sigA := ua.sig; s.sigB := ub.sig
+    s.rem := ua.sig; s.divisor := ub.sig; s.quo := 0.U
     s.lzA := lzc(ua.sig); s.lzB := lzc(ub.sig)
     s
   }
@@ -481,8 +474,8 @@ object Fp {
     val s = Wire(new DivState(f))
     s.resNaN := m.resNaN; s.resInf := m.resInf; s.resZero := m.resZero; s.sign := m.sign
     s.exp := m.exp - m.lzA.zext + m.lzB.zext
-    s.divisor := shlTrunc(m.sigB, m.lzB)
-    s.rem := shlTrunc(m.sigA, m.lzA)
+    s.divisor := shlTrunc(m.divisor, m.lzB)
+    s.rem := shlTrunc(m.rem(f.manBits, 0), m.lzA)
     s.quo := 0.U
     s
   }

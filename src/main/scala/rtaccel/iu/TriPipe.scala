@@ -96,17 +96,7 @@ class TriPipe(p: PlatformParams) extends Module {
   private val conds = Seq(Fp.cmpT(pipe, f, det, zero)((g, a, b) => !Fp.eq(g, a, b)), cmp(u, zero)(Fp.ge), cmp(v, zero)(Fp.ge),
     cmp(add(u, v), one)(Fp.le), cmp(t, wide(job.map(0)(_.ray.tmin)))(Fp.ge), cmp(t, wide(job.map(0)(_.tmax)))(Fp.lt))
   private val hit = pipe.op(conds.map(_.map(0)(_.asUInt)), 1)(c => c.map(_.asBool).reduce(_ && _))
-  private val tuv = Seq(t, u, v).map(narrow)
-  private val (tDone, dDone) = pipe.join(Seq(hit) ++ tuv: _*)
-  private val j = pipe.delayTo(job.map(0)(TriMeta(p, _)), tDone).v
-  val res = Wire(new TriResult(p))
-  res.tu := j.tu
-  res.hit := pipe.delayTo(hit, tDone).v && !j.err
-  res.t := pipe.delayTo(tuv(0), tDone).v; res.u := pipe.delayTo(tuv(1), tDone).v; res.v := pipe.delayTo(tuv(2), tDone).v
-  res.prim := j.prim
-  res.last := j.last
-  res.err := j.err
-  private val out = stage(Timed(res, tDone, dDone + 1))
+  private val out = TriPipe.finish(p, pipe, job, hit, Seq(t, u, v).map(narrow))
   /** Cycles from a job to its result. */
   val latency: Int = out.at
   io.out.bits := out.v
@@ -116,6 +106,21 @@ class TriPipe(p: PlatformParams) extends Module {
 }
 
 object TriPipe {
+  /** What both triangle pipes end in: the hit and t, u, v (fp32) with the job's fields, read when the last of them is
+    * ready, into the result register.
+    */
+  private[iu] def finish(p: PlatformParams, pipe: rtaccel.fp.Stager, job: Timed[TriJob], hit: Timed[Bool], tuv: Seq[Timed[UInt]]): Timed[TriResult] = {
+    val (tDone, dDone) = pipe.join(Seq(hit) ++ tuv: _*)
+    def at[T <: Data](x: Timed[T]) = pipe.delayTo(x, tDone).v
+    val j = at(job.map(0)(TriMeta(p, _)))
+    val res = Wire(new TriResult(p))
+    res.tu := j.tu
+    res.hit := at(hit) && !j.err
+    res.t := at(tuv(0)); res.u := at(tuv(1)); res.v := at(tuv(2))
+    res.prim := j.prim; res.last := j.last; res.err := j.err
+    pipe.reg(Timed(res, tDone, dDone + 1))
+  }
+
   /** Pipelined dividers per triangle pipe (1/det), in either TRI_TEST (the cost model counts them). */
   val dividers: Int = 1
   /** LUT levels in front of the pipe's inputs in the IU (the collection's beat selection). */

@@ -100,16 +100,7 @@ class WatertightPipe(p: PlatformParams) extends Module {
     cmp(t, field(_.ray.tmin))(Fp.ge), cmp(t, field(_.tmax))(Fp.lt))
   private val hit = pipe.op((conds.map(_.map(0)(_.asUInt)) :+ mixed.map(0)(_.asUInt)), 1)(c =>
     c.init.map(_.asBool).reduce(_ && _) && !c.last.asBool)
-  private val (tDone, dDone) = pipe.join(hit, t, u, v)
-  private val j = pipe.delayTo(job.map(0)(TriMeta(p, _)), tDone).v
-  val res = Wire(new TriResult(p))
-  res.tu := j.tu
-  res.hit := pipe.delayTo(hit, tDone).v && !j.err
-  res.t := pipe.delayTo(t, tDone).v; res.u := pipe.delayTo(u, tDone).v; res.v := pipe.delayTo(v, tDone).v
-  res.prim := j.prim
-  res.last := j.last
-  res.err := j.err
-  private val out = stage(Timed(res, tDone, dDone + 1))
+  private val out = TriPipe.finish(p, pipe, job, hit, Seq(t, u, v))
   /** Cycles from a job to its result (10 + divStages with PIPELINE=none). */
   val latency: Int = out.at
   io.out.bits := out.v
