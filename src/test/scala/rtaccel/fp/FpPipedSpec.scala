@@ -1,6 +1,7 @@
 package rtaccel.fp
 
 import chisel3._
+import chisel3.util.Cat
 import chiseltest._
 import chiseltest.simulator.VerilatorBackendAnnotation
 import org.scalatest.funsuite.AnyFunSuite
