@@ -19,7 +19,8 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
   private val levelBits = 4
   // configuration words of our own choosing: whatever the generator passes must read back unchanged
   private val constants: Seq[(RegMap.Reg, BigInt)] = Seq(Config0 -> BigInt(0x00200804L), Config1 -> BigInt(0x1f400040L),
-    NodeCache -> BigInt(0x0003012dL), PrimCache -> BigInt(0x00000000L), Formats -> BigInt(0x00056700L), Formats2 -> BigInt(0x00000008L))
+    NodeCache -> BigInt(0x0003012dL), PrimCache -> BigInt(0x00000000L), Formats -> BigInt(0x00056700L), Formats2 -> BigInt(0x00000008L),
+    Pipeline -> BigInt(0x22150d06L))
   private def regFile = new RegFile(constants, counterNames, primBaseBits, maxLevelReset, levelBits)
   private val Magic = 0x52544143L // 'RTAC', docs
   private def lsb(r: Reg, f: String) = r.fields.find(_.name == f).get.lsb
@@ -196,7 +197,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
       h.tick = () => if (dut.io.clearCounters.peek().litToBoolean) clears += 1
       val before = h.dump()
       val ro = regs.filter(_.access == RO)
-      assert(ro.length == 11 + 2 * counterNames.length)
+      assert(ro.length == 12 + 2 * counterNames.length)
       for (r <- ro; data <- Seq(0xffffffffL, 0L, h.rnd.nextInt().toLong); strb <- Seq(0xf, 1 + h.rnd.nextInt(14))) {
         val resp = h.write(r.offset, data, strb)
         assert(resp == AxiLite.SlvErr, f"write 0x$data%08x strb $strb to ${r.name}: response $resp, want SLVERR (seed $seed)")
