@@ -9,14 +9,15 @@ import chisel3.util._
   * With fanIn >= n it is one RRArbiter, as before pipelining was a parameter. Every request offered is passed on
   * exactly once; the order among requesters is round robin within each group, and round robin over the groups.
   */
-class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int) extends Module {
+class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boolean = true) extends Module {
   require(n >= 1 && fanIn >= 2, s"a tree arbiter needs requesters (got $n) and a fan-in of 2 or more (got $fanIn)")
   val io = IO(new Bundle {
     val in = Flipped(Vec(n, Decoupled(gen)))
     val out = Decoupled(gen)
-    val chosen = Output(UInt(log2Ceil(n).max(1).W))
+    val chosen = if (withChosen) Some(Output(UInt(log2Ceil(n).max(1).W))) else None
   })
-  private val idxBits = log2Ceil(n).max(1)
+  // the index travels only when it is read (withChosen)
+  private val idxBits = if (withChosen) log2Ceil(n).max(1) else 0
   private class Tagged extends Bundle {
     val bits = gen.cloneType
     val idx = UInt(idxBits.W)
@@ -32,7 +33,7 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int) extends Module 
 
   private val leaves = io.in.zipWithIndex.map { case (x, i) =>
     val t = Wire(Decoupled(new Tagged))
-    t.valid := x.valid; t.bits.bits := x.bits; t.bits.idx := i.U; x.ready := t.ready
+    t.valid := x.valid; t.bits.bits := x.bits; t.bits.idx := (if (withChosen) i.U else 0.U); x.ready := t.ready
     t
   }
   /** Levels of queues between an input and the output (0: one flat arbiter). */
@@ -44,7 +45,7 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int) extends Module 
   }
   io.out.valid := top.valid
   io.out.bits := top.bits.bits
-  io.chosen := top.bits.idx
+  io.chosen.foreach(_ := top.bits.idx)
   top.ready := io.out.ready
 }
 

@@ -384,9 +384,9 @@ object Fp {
   /** mulCore's product in two halves of the multiplier b (pipelined wide multipliers): a * b's low bits and a *
     * b's high bits, summed in the next segment.
     */
-  class MulParts(n: Int, lo: Int, ew: Int) extends Bundle {
+  class MulParts(n: Int, lo: Int, hiW: Int, ew: Int) extends Bundle {
     val pLo = UInt((n + lo).W)
-    val pHi = UInt((2 * n).W)
+    val pHi = UInt(hiW.W) // a * b's high part (split), or the whole product
     val exp = SInt(ew.W)
     val sign = Bool()
     val toPos = Bool()
@@ -403,7 +403,7 @@ object Fp {
     val parts = pipe.op(Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt)), if (split) Depth.mul(18) else Depth.mul(n)) { v =>
       val ua = new Unpacked(f, v(0))
       val ub = new Unpacked(f, v(1))
-      val o = Wire(new MulParts(n, lo, ew))
+      val o = Wire(new MulParts(n, lo, if (split) 2 * n - lo else 2 * n, ew))
       o.sign := ua.sign ^ ub.sign
       o.exp := (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
       o.toPos := (if (toPos.isDefined) v(2)(0) else false.B)

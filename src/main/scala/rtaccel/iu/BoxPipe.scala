@@ -61,13 +61,15 @@ class BoxPipe(p: PlatformParams) extends Module {
     val invHi = Seq.tabulate(3)(a => stage(Fp.convertT(pipe, f, bf, inv(a), const(true))))
     val tmin1 = stage(Fp.convertT(pipe, f, bf, job.map(0)(_.ray.tmin), const(false)))
     val tmax1 = stage(Fp.convertT(pipe, f, bf, job.map(0)(_.tmax), const(true)))
+    val invSign = (0 until 3).map(a => inv(a).map(0)(_(f.width - 1))) // only the sign of 1/d is needed past stage 1
     val t = Seq.tabulate(p.m, 6) { (c, k) =>
       val a = k % 3
       val d = ab(6 * c + k)
       // a min plane bounds the entry (down) unless 1/d < 0 swaps the planes; 1/d taken at the bound that keeps the
       // product on its side: one selection in front of the multiplier
-      val Seq(lo, hi, dd, iv) = pipe.align(Seq(invLo(a), invHi(a), d, inv(a)))
-      val invNeg = iv.v(f.width - 1)
+      val Seq(lo, hi, dd) = pipe.align(Seq(invLo(a), invHi(a), d))
+      val iv = pipe.delayTo(invSign(a), dd.at)
+      val invNeg = iv.v
       val up = if (k < 3) invNeg else !invNeg
       val useHi = dd.v(bf.width - 1) ^ up
       val pick = Timed(Mux(useHi, hi.v, lo.v), dd.at, Seq(lo, hi, dd, iv).map(_.depth).max + 1)

@@ -40,7 +40,9 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
 
   // ---- arbitration and issue: a request goes to memory and its context to the job FIFO together
   // a tree of small arbiters with queues between its levels (PIPELINE), one RRArbiter without a budget
-  val arb = Module(new rtaccel.arb.TreeArbiter(new IuReq(p), requesters, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, requesters)))
+  // (the winner's index tags requests with RESP_ORDER=tagged only)
+  val arb = Module(new rtaccel.arb.TreeArbiter(new IuReq(p), requesters, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, requesters),
+    withChosen = p.respTagged))
   arb.io.in <> io.req
   class Job extends Bundle {
     val tu = UInt(p.tuBits.W)
@@ -73,7 +75,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   val jobReady = if (p.respTagged) true.B else if (p.respByPath) Mux(reqIsLeaf, jobQs(1).io.enq.ready, jobQs(0).io.enq.ready) else jobQs(0).io.enq.ready
   io.mem.req.valid := arb.io.out.valid && jobReady
   io.mem.req.bits.childRef := r.cref
-  for (t <- io.mem.req.bits.tag) t := arb.io.chosen
+  for (t <- io.mem.req.bits.tag) t := arb.io.chosen.get
   val newJob = Wire(new Job)
   newJob.tu := r.tu
   newJob.isLeaf := reqIsLeaf
@@ -91,7 +93,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   // beat's tag names, valid while a job of its kind is outstanding (at least 2 entries: a 1-bit tag addresses them)
   val jobTables = if (p.respTagged) Seq(false, true).map { leaf =>
     val t = Mem(math.max(2, requesters), new Job).suggestName(if (leaf) "jobs_leaf" else "jobs_node")
-    when(io.mem.req.fire && reqIsLeaf === leaf.B) { t.write(arb.io.chosen, newJob) }
+    when(io.mem.req.fire && reqIsLeaf === leaf.B) { t.write(arb.io.chosen.get, newJob) }
     t
   } else Nil
   def tableJobs(beats: DecoupledIO[FetchBeat], leaf: Boolean): DecoupledIO[Job] = {

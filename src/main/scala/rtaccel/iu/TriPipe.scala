@@ -85,7 +85,7 @@ class TriPipe(p: PlatformParams) extends Module {
   // 7..: inv = 1/det
   private val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget))
   private val detIn = pipe.align(Seq(det, one)) // the divider reads its operands as they come
-  div.io.in.valid := true.B
+  div.io.in.valid := pipe.valid(io.in.valid, detIn(0).at)
   div.io.in.bits.a := detIn(1).v
   div.io.in.bits.b := detIn(0).v
   // (registered with a budget; with PIPELINE=none the depth is not counted)
@@ -100,7 +100,8 @@ class TriPipe(p: PlatformParams) extends Module {
   /** Cycles from a job to its result. */
   val latency: Int = out.at
   io.out.bits := out.v
-  io.out.valid := pipe.valid(io.in.valid, latency)
+  // the divider's valid, carried on to the result
+  io.out.valid := ShiftRegister(div.io.out.valid, latency - inv.at, false.B, true.B)
   /** Its pipeline registers, its divider's included (a census for the cost model). */
   val census: rtaccel.fp.Stager.Census = pipe.census + div.census
 }

@@ -61,7 +61,7 @@ class TraversalController(p: PlatformParams) extends Module {
   }
 
   // Results: round-robin over TUs, with host backpressure.
-  val arb = Module(new rtaccel.arb.TreeArbiter(new TuResult, p.tus, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, p.tus)))
+  val arb = Module(new rtaccel.arb.TreeArbiter(new TuResult, p.tus, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, p.tus), withChosen = false))
   arb.io.in <> io.tuResult
   io.out <> arb.io.out
 }

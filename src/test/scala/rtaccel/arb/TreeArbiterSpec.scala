@@ -28,7 +28,7 @@ class TreeArbiterSpec extends AnyFunSuite with ChiselScalatestTester {
           dut.io.out.ready.poke(ready.B)
           if (ready && dut.io.out.valid.peek().litToBoolean) {
             val w = dut.io.out.bits.peekInt().toInt
-            assert(dut.io.chosen.peekInt().toInt == (w >> 8), s"cycle $cycle: chosen names another requester than the data's")
+            assert(dut.io.chosen.get.peekInt().toInt == (w >> 8), s"cycle $cycle: chosen names another requester than the data's")
             got((w >> 8, w & 0xff)) += 1
           }
           for (i <- 0 until n) if (offering(i) && dut.io.in(i).ready.peek().litToBoolean) {
