@@ -102,33 +102,21 @@ object Fp {
     r
   }
 
-  /** roundPack after its shift amounts are known. */
-  class NormMid(val n: Int, val w: Int, val slW: Int, val rW: Int) extends Bundle {
-    val sign = Bool()
-    val ex = SInt(w.W)
-    val sig = UInt(n.W)
+  /** roundPack after its shift amounts are known: the value, its significand padded and its exponent widened, with
+    * the left shift, the saturated right shift and which of the two applies. After the shifts the value is a RoundIn
+    * again, its exponent the output's (>= 1) and its significand's hidden bit on top unless that exponent is 1.
+    */
+  class NormMid(n: Int, w: Int, val slW: Int, val rW: Int) extends RoundIn(n, w) {
     val sl = UInt(slW.W)
     val rSat = UInt(rW.W)
     val leftCase = Bool()
-    val sticky = Bool()
-    val toPos = Bool()
-    val sp = new Special
-  }
-  /** roundPack after normalising: s has its hidden bit on top unless eOut == 1 (subnormal). */
-  class Norm(val n: Int, val w: Int) extends Bundle {
-    val sign = Bool()
-    val eOut = SInt(w.W)
-    val s = UInt(n.W)
-    val sticky = Bool()
-    val toPos = Bool()
-    val sp = new Special
   }
 
   /** roundPack after rounding: the m+2-bit significand (a carry into its top bit moves to the next binade). */
   class Rounded(val m: Int, val e: Int) extends Bundle {
     val sign = Bool()
-    val eLow = UInt(e.W)   // the exponent field before a rounding carry: eOut - 1, low bits
-    val bigExp = Bool()    // eOut - 1 >= maxExp: overflow whatever the rounding
+    val eLow = UInt(e.W)   // the exponent field before a rounding carry: exp - 1, low bits
+    val bigExp = Bool()    // exp - 1 >= maxExp: overflow whatever the rounding
     val rounded = UInt((m + 2).W)
     val toPos = Bool()
     val sp = new Special
@@ -165,26 +153,26 @@ object Fp {
       val rAmt = 1.S - ex
       val rSat = Mux(rAmt > (n + 1).S, (n + 1).U, rAmt.asUInt(log2Ceil(n + 2) - 1, 0))
       val o = Wire(new NormMid(n, w, sl.getWidth, rSat.getWidth))
-      o.sign := r.sign; o.ex := ex; o.sig := sig; o.sl := sl; o.rSat := rSat; o.leftCase := leftCase
+      o.sign := r.sign; o.exp := ex; o.sig := sig; o.sl := sl; o.rSat := rSat; o.leftCase := leftCase
       o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
       o
     }
     // 2: the shifts
     val norm = pipe.step(mid, Depth.shift(n) + (if (canUnderflow) 1 else 0)) { r =>
       val shl = shlTrunc(r.sig, r.sl)
-      val o = Wire(new Norm(n, w))
+      val o = Wire(new RoundIn(n, w))
       if (canUnderflow) {
         val wideR = Cat(r.sig, 0.U((n + 1).W)) >> r.rSat
-        o.s := Mux(r.leftCase, shl, wideR(2 * n, n + 1))
+        o.sig := Mux(r.leftCase, shl, wideR(2 * n, n + 1))
         o.sticky := r.sticky || (!r.leftCase && wideR(n, 0).orR)
-      } else { o.s := shl; o.sticky := r.sticky }
-      o.eOut := Mux(r.leftCase, r.ex - r.sl.zext, 1.S) // >= 1; with s's MSB clear only when eOut == 1 (subnormal)
+      } else { o.sig := shl; o.sticky := r.sticky }
+      o.exp := Mux(r.leftCase, r.exp - r.sl.zext, 1.S) // >= 1; with sig's MSB clear only when it is 1 (subnormal)
       o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp
       o
     }
     // 3: round: the rounding decision and the increment
     val rnd = pipe.step(norm, Depth.reduce(n - m) + 2 + Depth.carry(m + 2)) { r =>
-      val s = r.s
+      val s = r.sig
       val kept = s(n - 1, n - 1 - m) // m+1 bits, hidden bit on top
       val guard = s(n - 2 - m)
       val low = if (n - 3 - m >= 0) s(n - 3 - m, 0).orR else false.B
@@ -194,7 +182,7 @@ object Fp {
       val o = Wire(new Rounded(m, e))
       o.rounded := kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
       // beside the increment: the exponent field of the packing below
-      val eM1 = r.eOut - 1.S
+      val eM1 = r.exp - 1.S
       o.bigExp := eM1 >= f.maxExp.S
       o.eLow := eM1.asUInt(e - 1, 0)
       o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp
@@ -204,8 +192,8 @@ object Fp {
     pipe.step(rnd, Depth.carry(m + e) + 3) { r =>
       val sign = r.sign
       val awayDir = if (directed) Some(r.toPos =/= sign) else None
-      // Packing trick: ((eOut-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
-      // (hidden bit 0, eOut = 1) packs with exponent field 0, and a rounding carry bumps the exponent.
+      // Packing trick: ((exp-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
+      // (hidden bit 0, exp = 1) packs with exponent field 0, and a rounding carry bumps the exponent.
       val sum = Cat(r.eLow, 0.U(m.W)) +& r.rounded
       val ovf = r.bigExp || sum >= (BigInt(f.maxExp) << m).U
       // an overflow rounded toward zero stays at the largest finite value
