@@ -297,16 +297,18 @@ paper-caches: deps
 
 # The paper reproduced (docs/results.md "make paper"): Figs 4, 5-6, 8, 9, 11, 12-13 with and without cache, Table 2
 # and Fig 15 on SCENES, each of our numbers beside the paper's, in OUT/report.md (default build/paper) with its
-# PNGs. Runs paper-nocache, paper-caches, analyze, roofline (Table 2: paper2017, PAPER_TABLE2_TUS, 2^13 DM) and
-# bench per scene (dse/paper.py); a rerun reuses every step whose outputs are unchanged (OUT/paper.sqlite).
-# PAPER_TUS="" skips the TU sweeps, PAPER_TABLE2_TUS=0 the Table 2 RTL run, PAPER_BENCH=0 Embree; MACHINE_GBPS
+# PNGs. Runs paper-nocache, paper-caches, analyze, roofline (Table 2: paper2017, PAPER_TABLE2_TUS, 2^13 DM, at
+# 150 MHz and again at CLOCK_MHZ=fmax after make area of that circuit) and bench per scene (dse/paper.py); a rerun
+# reuses every step whose outputs are unchanged (OUT/paper.sqlite). PAPER_TUS="" skips the TU sweeps,
+# PAPER_TABLE2_TUS=0 the Table 2 RTL runs, PAPER_TABLE2_FMAX=0 the reached-clock run, PAPER_BENCH=0 Embree; MACHINE_GBPS
 # sets this machine's bandwidth for Fig 15 (default: measured). Absent scenes are skipped; none: the embedded room.
 SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
 PAPER_TABLE2_TUS ?= 32
+PAPER_TABLE2_FMAX ?= 1
 PAPER_BENCH ?= 1
 paper: deps build/scenes/cornell.obj
 	@$(PY) -m dse.paper --scenes "$(SCENES)" --fallback build/scenes/cornell.obj --out $(or $(OUT),build/paper) \
-	  --version $(VERSION) --tus "$(PAPER_TUS)" --table2-tus $(PAPER_TABLE2_TUS) --bench $(PAPER_BENCH) \
+	  --version $(VERSION) --tus "$(PAPER_TUS)" --table2-tus $(PAPER_TABLE2_TUS) --table2-fmax $(PAPER_TABLE2_FMAX) --bench $(PAPER_BENCH) \
 	  --width $(PAPER_WIDTH) --height $(PAPER_HEIGHT) --tus-width $(PAPER_TUS_WIDTH) --tus-height $(PAPER_TUS_HEIGHT) \
 	  --depth $(DEPTH) --seed $(SEED) $(if $(MACHINE_GBPS),--machine-gbps $(MACHINE_GBPS)) --make "$(MAKE)"
 

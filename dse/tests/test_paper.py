@@ -43,9 +43,16 @@ def test_report_has_every_section_and_ours_beside_the_papers(work):
     # Table 2: our RTL rays/s in the row that names the paper's FPGA figure for the same scene
     row = next(l for l in text.splitlines() if l.startswith("| sponza_dabrovic | 2.88e5"))
     assert "Sponza 3.04e5" in row
+    # ... and at the clock the circuit reaches, which names its source; the run at fmax came after make area
+    assert "| 2.99e5 at 156 MHz (proxy) |" in row
+    c = calls(work)
+    first_area = next(i for i, l in enumerate(c) if l.startswith("area ") and "CONFIG=paper2017" in l)
+    assert any(l.startswith("roofline ") and "CLOCK_MHZ=fmax" in l for l in c[first_area:])
+    assert "0.95× the paper's FPGA at 32 TUs and 150 MHz (0.98× at the 156 MHz it reaches by proxy)" in text
     # the paper's CPU/GPU/FPGA rows, and conference set beside Kitchen and Classroom
     assert "| paper CPU | 8.70e5 | 1.10e6 | 3.31e5 | 7.64e5 |" in text
-    assert any(l.startswith("| conference | 2.88e5 | Kitchen 2.60e5 / Classroom 2.52e5") for l in text.splitlines())
+    assert any(l.startswith("| conference | 2.88e5 | 2.99e5 at 156 MHz (proxy) | Kitchen 2.60e5 / Classroom 2.52e5")
+               for l in text.splitlines())
     # Fig 15: ours per GB/s at 1.2 GB/s, Embree per GB/s at the machine's 10 GB/s, and the paper's ratio
     ours, emb = fake_make.RTL_RAYS_PER_S / 1.2, fake_make.EMBREE_RAYS_PER_S / 10
     assert f"| sponza_dabrovic | {g(ours)} | {g(emb)} | " \
@@ -64,7 +71,7 @@ def test_report_has_every_section_and_ours_beside_the_papers(work):
 def test_rerun_reuses_every_step(work):
     assert paper.main(args()) == 0
     n = len(calls(work))
-    assert n == 2 * 7  # per scene: 2 golden frames, nocache, caches, analyze, table2, bench
+    assert n == 2 * 9  # per scene: 2 golden frames, nocache, caches, analyze, table2, table2-area, table2-fmax, bench
     assert paper.main(args()) == 0
     assert len(calls(work)) == n
     assert "| reused |" in (work / "build/paper/report.md").read_text()
@@ -107,7 +114,15 @@ def test_empty_tus_and_no_table2_say_which_knob(work):
     assert paper.main(a) == 0
     text = (work / "build/paper/report.md").read_text()
     assert "not run (PAPER_TUS is empty)" in text and "not run (PAPER_TABLE2_TUS=0)" in text
-    assert not any(c.startswith(("paper-nocache", "roofline")) for c in calls(work))
+    assert not any(c.startswith(("paper-nocache", "roofline", "area")) for c in calls(work))
+
+
+def test_table2_at_the_papers_clock_only(work):
+    assert paper.main(args("--table2-fmax", "0")) == 0
+    text = (work / "build/paper/report.md").read_text()
+    assert "not run (PAPER_TABLE2_FMAX=0)" in text
+    assert not any("CLOCK_MHZ=fmax" in c or c.startswith("area") for c in calls(work))
+    assert any(l.startswith("| sponza_dabrovic | 2.88e5 | — |") for l in text.splitlines())
     for s in SECTIONS:
         assert s in text
 
