@@ -8,14 +8,14 @@ import rtaccel.io.InputError
   * measures the operation's own logic and its LUT levels from input register to result register, as a vendor
   * core's figures are quoted.
   */
-class FpProbe(op: FpProbe.Op, f: FpFormat, budget: Option[Int] = None) extends Module {
+class FpProbe(op: FpProbe.Op, f: FpFormat, budget: Option[Int] = None, dsp: rtaccel.fp.DspShape = rtaccel.fp.DspShape.Dsp48) extends Module {
   override def desiredName: String = FpProbe.moduleName(op) + budget.fold("")(b => s"_p$b")
   val io = IO(new Bundle {
     val a = Input(UInt(f.width.W))
     val b = Input(UInt(f.width.W))
     val y = Output(UInt(f.width.W))
   })
-  private val pipe = new Stager(budget)
+  private val pipe = new Stager(budget, dsp)
   private val y = pipe.reg(op.piped(pipe, f, Timed(RegNext(io.a), 1, 0), Timed(RegNext(io.b), 1, 0)))
   /** Cycles from the input registers to the result register. */
   val latency: Int = y.at - 1

@@ -28,7 +28,7 @@ object AreaFp {
     val runs = for (op <- ops; budget <- budgets) yield {
       var latency = 0
       val tag = op.name + budget.fold("")(b => s"-p$b")
-      val files = EmitVerilog.emitModule({ val m = new FpProbe(op, FpFormat.fp32, budget); latency = m.latency; m }, out.resolve(tag))
+      val files = EmitVerilog.emitModule({ val m = new FpProbe(op, FpFormat.fp32, budget, timing.dsp); latency = m.latency; m }, out.resolve(tag))
         .filter(_.toString.endsWith(".sv"))
       val top = files.map(_.getFileName.toString.stripSuffix(".sv")).find(_.startsWith(FpProbe.moduleName(op))).get
       val s0 = System.nanoTime()

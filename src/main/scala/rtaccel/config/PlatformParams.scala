@@ -249,8 +249,10 @@ final case class PlatformParams(
   val memControllers: Int = ius + nodeBanks
   /** PIPELINE's budget: LUT levels at most between two registers of a datapath (None: the fixed stages). */
   lazy val stageBudget: Option[Int] = pipelining.budget(family, pipelineMhz.getOrElse(clockMhz))
+  /** The board family's DSP block (boards/timing.json): with a budget, multipliers are cut into its products. */
+  lazy val dspShape: rtaccel.fp.DspShape = rtaccel.area.Timing.forFamily(family).dsp
   /** A register placer for one module's datapath at this budget (each module takes its own). */
-  def pipe: rtaccel.fp.Stager = new rtaccel.fp.Stager(stageBudget)
+  def pipe: rtaccel.fp.Stager = new rtaccel.fp.Stager(stageBudget, if (stageBudget.isDefined) dspShape else rtaccel.fp.DspShape.Dsp48)
   val cyclesPerSecond: Double = clockMhz * 1e6
   /** Sustained DRAM bytes per cycle of ONE channel: MEM_GBPS is per channel, since each of the MEM_CHANNELS is an
     * AXI4 master with a DRAM of its own, and the simulator models each channel alone (sim.DramModel at this rate).

@@ -372,38 +372,67 @@ object Fp {
   /** mulCore's product in two halves of the multiplier b (pipelined wide multipliers): a * b's low bits and a *
     * b's high bits, summed in the next segment.
     */
-  class MulParts(n: Int, lo: Int, hiW: Int, ew: Int) extends Bundle {
-    val pLo = UInt((n + lo).W)
-    val pHi = UInt(hiW.W) // a * b's high part (split), or the whole product
+  /** A product's pieces between the steps of its sum: piece i (at bit offset offs(i) of the product, which the
+    * hardware does not carry) of width widths(i), with the rest of the result beside them.
+    */
+  class MulParts(widths: Seq[Int], ew: Int) extends Bundle {
+    val parts = MixedVec(widths.map(w => UInt(w.W)))
     val exp = SInt(ew.W)
     val sign = Bool()
     val toPos = Bool()
     val sp = new Special
   }
 
+  /** The tiles of an n x n significand product on `dsp`: (a's bits, b's bits) of each, low bit first. */
+  private[fp] def mulTiles(n: Int, dsp: DspShape): Seq[((Int, Int), (Int, Int))] = {
+    def cuts(w: Int) = (0 until n by w).map(lo => (lo, (lo + w) min n))
+    // by offset in the product, so the pairwise sums join neighbours
+    (for (ca <- cuts(dsp.a); cb <- cuts(dsp.b)) yield (ca, cb)).sortBy { case ((a0, _), (b0, _)) => (a0 + b0, a0) }
+  }
+
   private def mulCore(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt], fo: FpFormat, toPos: Option[Timed[Bool]]): Timed[UInt] = {
     val ew = expW(f) max expW(fo)
     val n = f.manBits + 1
-    // with a budget, a significand wider than one DSP input (18 bits) is multiplied in two parts and summed after
-    // a possible register: the parts map to DSP slices and the sum to a carry chain
-    val lo = 17
-    val split = pipe.budget.isDefined && n > 18
-    val parts = pipe.op(Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt)), if (split) Depth.mul(18) else Depth.mul(n)) { v =>
+    // With a budget, a significand wider than a DSP block's inputs is multiplied in tiles of that size (each maps to
+    // one block, with no fabric adder inside it) and the tiles are summed pairwise, a step per level, so registers
+    // can go between the sums; without one the product is one multiplier.
+    val tiles = if (pipe.budget.isDefined) mulTiles(n, pipe.dsp) else Seq(((0, n), (0, n)))
+    val tiled = tiles.length > 1
+    var offs = tiles.map { case ((a0, _), (b0, _)) => a0 + b0 }
+    var widths = tiles.map { case ((a0, a1), (b0, b1)) => (a1 - a0) + (b1 - b0) }
+    var parts = pipe.op(Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt)), if (tiled) Depth.mul(18) /* one DSP block */ else Depth.mul(n)) { v =>
       val ua = new Unpacked(f, v(0))
       val ub = new Unpacked(f, v(1))
-      val o = Wire(new MulParts(n, lo, if (split) 2 * n - lo else 2 * n, ew))
+      val o = Wire(new MulParts(widths, ew))
       o.sign := ua.sign ^ ub.sign
       o.exp := (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
       o.toPos := (if (toPos.isDefined) v(2)(0) else false.B)
       val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
       o.sp := special(isNaN, ua.isInf || ub.isInf, ua.isZero || ub.isZero, o.sign)
-      if (split) { o.pLo := ua.sig * ub.sig(lo - 1, 0); o.pHi := ua.sig * ub.sig(n - 1, lo) }
-      else { o.pLo := DontCare; o.pHi := ua.sig * ub.sig } // the whole product, 2n bits, in pHi
+      for ((((a0, a1), (b0, b1)), i) <- tiles.zipWithIndex) o.parts(i) := ua.sig(a1 - 1, a0) * ub.sig(b1 - 1, b0)
       o
     }
-    val r = pipe.step(parts, if (split) Depth.carry(2 * n) else 0) { x =>
+    // pairwise sums down to two pieces; the last sum feeds the rounding in the same step (as a single product does)
+    while (offs.length > 2) {
+      val pairs = offs.indices.grouped(2).toSeq
+      val nOffs = pairs.map(g => g.map(offs).min)
+      // a sum of pieces below bit 2n fits in the span of its highest piece plus a carry, and never passes bit 2n
+      val nWidths = pairs.zip(nOffs).map { case (g, o) => ((g.map(i => offs(i) + widths(i)).max + (if (g.size > 1) 1 else 0)) min 2 * n) - o }
+      val oo = offs
+      parts = pipe.step(parts, Depth.carry(2 * n)) { x =>
+        val o = Wire(new MulParts(nWidths, ew))
+        o := DontCare
+        o.exp := x.exp; o.sign := x.sign; o.toPos := x.toPos; o.sp := x.sp
+        for ((g, j) <- pairs.zipWithIndex)
+          o.parts(j) := g.map(i => x.parts(i).pad(nWidths(j)) << (oo(i) - nOffs(j))).reduce(_ +& _)(nWidths(j) - 1, 0)
+        o
+      }
+      offs = nOffs; widths = nWidths
+    }
+    val oo = offs
+    val r = pipe.step(parts, if (tiled) Depth.carry(2 * n) else 0) { x =>
       // 2m+2 bits, binary point after the top bit pair
-      val prod = if (split) (x.pHi << lo) + x.pLo else x.pHi
+      val prod = oo.indices.map(i => x.parts(i).pad(2 * n) << oo(i)).reduce(_ +& _)
       roundIn(x.sign, x.exp, prod(2 * n - 1, 0), false.B, toPos.map(_ => x.toPos), x.sp)
     }
     roundPackT(pipe, fo, r, directed = toPos.isDefined)

@@ -12,12 +12,24 @@ final case class Timed[+T <: Data](v: T, at: Int, depth: Int) {
   def map[U <: Data](levels: Int)(fn: T => U): Timed[U] = Timed(fn(v), at, depth + levels)
 }
 
+/** The widest unsigned operands one DSP block of a family multiplies without fabric logic (boards/timing.json's
+  * `dsp_unsigned_bits`): Xilinx's DSP48 (25 x 18 signed) 24 x 17, Lattice ECP5's MULT18X18D 18 x 18.
+  */
+final case class DspShape(a: Int, b: Int) {
+  require(a >= 2 && b >= 2, s"a DSP block multiplies at least 2 x 2 bits (got $a x $b)")
+  override def toString: String = s"${a}x$b"
+}
+object DspShape {
+  val Dsp48: DspShape = DspShape(24, 17)
+}
+
 /** Register placement of a pipelined datapath (PIPELINE=, docs/timing.md). `budget` = the most LUT levels
   * allowed between two registers; None keeps the fixed stages the design had before pipelining was a parameter
   * (no register inside an operator). Every register this places is a plain `RegNext` (the pipelines never stall),
-  * so results do not depend on where the registers go: only latencies do.
+  * so results do not depend on where the registers go: only latencies do. With a budget, multipliers are cut into
+  * products of the target's DSP blocks (`dsp`), summed on carry chains with registers between the sums.
   */
-final class Stager(val budget: Option[Int]) {
+final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48) {
   require(budget.forall(_ >= 1), s"a pipeline budget must be at least 1 LUT level (got ${budget.get})")
   private var placed = Stager.Census()
   /** The register bits this Stager has placed so far (a census for the cost model; synthesis may trim unused ones). */

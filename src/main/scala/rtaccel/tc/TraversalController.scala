@@ -26,12 +26,15 @@ class TraversalController(p: PlatformParams) extends Module {
   private val one = "h3f800000".U(32.W)
 
   // Ray preparation: the pipeline cannot stall, so a ray enters only when the queue behind it has room
-  // for everything already in flight.
+  // for everything already in flight. `credits` is that room (the queue's size less the rays in the dividers and
+  // in the queue), kept in a register of its own so `ready` is a compare with zero: summing the queue's count with
+  // an in-flight counter put an adder and a compare in front of every input's handshake (the TC's routed critical
+  // path on ECP5).
   val divs = Seq.fill(TraversalController.dividers)(Module(new FpDivPipe(f, p.divStages, p.stageBudget)))
   private val lat = divs.head.latency
   val prepared = Module(new Queue(new TuRay(p), lat + 2))
-  val inFlight = RegInit(0.U(log2Ceil(lat + 3).W))
-  io.in.ready := inFlight +& prepared.io.count < (lat + 2).U
+  val credits = RegInit((lat + 2).U(log2Ceil(lat + 3).W))
+  io.in.ready := credits =/= 0.U
   for (a <- 0 until 3) {
     divs(a).io.in.valid := io.in.fire
     divs(a).io.in.bits.a := one
@@ -39,7 +42,7 @@ class TraversalController(p: PlatformParams) extends Module {
   }
   val rayDelayed = ShiftRegister(io.in.bits, lat)
   val outValid = divs.map(_.io.out.valid).reduce(_ && _) // the three run in lockstep
-  inFlight := inFlight + io.in.fire.asUInt - outValid.asUInt
+  credits := credits - io.in.fire.asUInt + prepared.io.deq.fire.asUInt
   prepared.io.enq.valid := outValid
   prepared.io.enq.bits.id := rayDelayed.id
   for (a <- 0 until 3) {

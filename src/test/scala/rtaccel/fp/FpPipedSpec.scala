@@ -9,13 +9,13 @@ import org.scalatest.funsuite.AnyFunSuite
 /** Every FpOps operation built by a Stager with a budget (registers inside the operators, fp.Stager), one pair per
   * cycle, all results read at the cycle of the slowest: `out` packs the 8 value results then the 5 compare bits.
   */
-class FpPipedHarness(f: FpFormat, budget: Int) extends Module {
+class FpPipedHarness(f: FpFormat, budget: Int, dsp: DspShape = DspShape.Dsp48) extends Module {
   val io = IO(new Bundle {
     val a = Input(UInt(f.width.W))
     val b = Input(UInt(f.width.W))
     val out = Output(UInt((FpOps.numValueOps * f.width + 5).W))
   })
-  private val pipe = new Stager(Some(budget))
+  private val pipe = new Stager(Some(budget), dsp)
   private val a = Timed(io.a, 0, 1); private val b = Timed(io.b, 0, 1)
   private val div = Module(new FpDivPipe(f, 0, Some(budget)))
   div.io.in.valid := true.B; div.io.in.bits.a := io.a; div.io.in.bits.b := io.b
@@ -35,13 +35,26 @@ class FpPipedHarness(f: FpFormat, budget: Int) extends Module {
 class FpPipedSpec extends AnyFunSuite with ChiselScalatestTester {
   private val fp32 = FpFormat.fp32
   private val nRandom = 60000
-  // budgets: the paper's xc5v at 150 MHz (6) and the deepest that still splits every segment (2); make regress adds 4 and 9
-  for (budget <- Seq(2, 6) ++ (if (rtaccel.Regress.full) Seq(4, 9) else Nil))
-    test(s"fp32 operators pipelined at a $budget-level budget equal Java float on edge pairs, ties and $nRandom random pairs, one per cycle") {
-      test(new FpPipedHarness(fp32, budget)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+  // budgets: the paper's xc5v at 150 MHz (6) and the deepest that still splits every segment (2), on Xilinx's DSP48;
+  // a made-up 7 x 9 DSP block cuts the product into 12 tiles summed over four levels (the tree ECP5's 18 x 18 blocks
+  // use with four tiles); make regress adds 4 and 9 levels and ECP5's block itself
+  private val runs = Seq((2, DspShape.Dsp48), (6, DspShape.Dsp48), (3, DspShape(7, 9))) ++
+    (if (rtaccel.Regress.full) Seq((4, DspShape.Dsp48), (9, DspShape.Dsp48), (2, DspShape(18, 18))) else Nil)
+  test("a product's tiles cover each bit pair of the operands once, within the DSP block") {
+    for (n <- Seq(8, 11, 17, 18, 24, 25, 53); dsp <- Seq(DspShape.Dsp48, DspShape(18, 18), DspShape(7, 9))) {
+      val tiles = Fp.mulTiles(n, dsp)
+      val cover = for (((a0, a1), (b0, b1)) <- tiles; i <- a0 until a1; j <- b0 until b1) yield (i, j)
+      assert(cover.sorted == (for (i <- 0 until n; j <- 0 until n) yield (i, j)), s"n=$n on $dsp")
+      assert(tiles.forall { case ((a0, a1), (b0, b1)) => a1 - a0 <= dsp.a && b1 - b0 <= dsp.b }, s"n=$n on $dsp")
+    }
+    assert(Fp.mulTiles(24, DspShape(18, 18)).length == 4 && Fp.mulTiles(24, DspShape.Dsp48).length == 2)
+  }
+  for ((budget, dsp) <- runs)
+    test(s"fp32 operators pipelined at a $budget-level budget on ${dsp} DSP blocks equal Java float on edge pairs, ties and $nRandom random pairs, one per cycle") {
+      test(new FpPipedHarness(fp32, budget, dsp)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
         val lat = dut.latency
         info(s"latencies (add, sub, mul, div, min/max x4, compares x5): ${dut.opLatencies.mkString(", ")}; read at $lat")
-        val g = new FpTestGen(fp32, 11 + budget)
+        val g = new FpTestGen(fp32, 11 + budget + dsp.a)
         val pairs = g.edgePairs.iterator ++ Iterator.fill(20000)(g.addTie()) ++ Iterator.fill(20000)(g.mulTie()) ++
           Iterator.fill(10000)(g.rangeEdge()) ++ Iterator.fill(nRandom)(g.mixed())
         val chk = new FpCheck(s"piped$budget")
