@@ -47,7 +47,7 @@ object Synthesis {
       Files.createDirectories(work)
       say(s"synthesizing $what for $family with Yosys $version (minutes for the whole platform)")
       Yosys.synthesize(files, recipe, work, what, say)
-      val levels = Levels.ofNetlist(work.resolve(Yosys.netlistFile))
+      val levels = Levels.ofNetlist(work.resolve(Yosys.netlistFile), Timing.forFamily(family).dspLevels)
       Files.writeString(work.resolve(levelsFile), ujson.write(ujson.Obj("about" -> ("LUT levels of the deepest combinational " +
         "path per module (rtaccel.area.Levels)"), "top" -> top, "family" -> family, "yosys_version" -> version,
         "rtaccel" -> rtaccelVersion, "modules" -> ujson.Obj.from(levels.toSeq.sorted.map { case (m, n) => m -> ujson.Num(n) })), indent = 2))
@@ -73,7 +73,9 @@ object Synthesis {
 
   /** The folder of the synthesis of `files` with `top` for `family` (the key: see `run`). */
   def cacheDir(files: Seq[Path], top: String, family: String, cacheRoot: Path): Path =
-    cacheRoot.resolve(hash(files, s"${Yosys.version()} $family $top\n${Yosys.recipe(family, top, modules(files))}"))
+    // the proxy's rules are part of the key: levels.json is all that is kept of the netlist
+    cacheRoot.resolve(hash(files, s"${Yosys.version()} $family $top levels v${Levels.version} dsp ${Timing.forFamily(family).dspLevels}\n" +
+      Yosys.recipe(family, top, modules(files))))
 
   /** How many times each module is instantiated in the design under `top` (top itself once). */
   def countInstances(mods: Map[String, Map[String, Long]], top: String): Map[String, Long] = {

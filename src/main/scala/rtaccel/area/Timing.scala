@@ -6,6 +6,7 @@ import rtaccel.io.InputError
 /** The levels -> MHz rule of one family (boards/timing.json): a proxy with no placement, routing or retiming. */
 final case class FamilyTiming(family: String, levelNs: Double, overheadNs: Double, capMhz: Double, source: String,
                               dsp: rtaccel.fp.DspShape = rtaccel.fp.DspShape.Dsp48) {
+  def dspLevels: Int = dsp.levels
   def fmaxMhz(levels: Int): Double = math.min(capMhz, 1000.0 / (overheadNs + levels * levelNs))
   /** The most LUT levels a path may have at `mhz` by this rule (at least 1): what PIPELINE=auto budgets. */
   def levelsFor(mhz: Double): Int = math.max(1, math.floor((1000.0 / mhz - overheadNs) / levelNs + 1e-9).toInt)
@@ -23,8 +24,10 @@ object Timing {
     val fams = j("families").obj
     val t = fams.getOrElse(family, throw new InputError(s"$path has no rule for family '$family'; add one (it has ${fams.keys.toSeq.sorted.mkString(", ")})"))
     def num(k: String) = t.obj.get(k).map(_.num).getOrElse(throw new InputError(s"family '$family' in $path has no '$k'"))
+    val dspLevels = num("dsp_levels")
+    if (dspLevels < 0 || dspLevels != dspLevels.toInt) throw new InputError(s"family '$family' in $path: dsp_levels must be a whole number >= 0 (got $dspLevels)")
     val dsp = t.obj.get("dsp_unsigned_bits").collect { case ujson.Arr(v) if v.length == 2 && v.forall(x => x.numOpt.exists(d => d >= 2 && d == d.toInt)) =>
-      rtaccel.fp.DspShape(v(0).num.toInt, v(1).num.toInt)
+      rtaccel.fp.DspShape(v(0).num.toInt, v(1).num.toInt, dspLevels.toInt)
     }.getOrElse(throw new InputError(s"family '$family' in $path needs dsp_unsigned_bits: [a, b], the widest unsigned operands one DSP block multiplies"))
     FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""), dsp)
   }

@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import java.nio.file.{Files, Path, Paths, StandardCopyOption}
-import rtaccel.area.{Boards, Route, Routed}
+import rtaccel.area.{Boards, Route, Routed, Timing}
 import rtaccel.io.InputError
 
 /** make timing: the routed clock of a configuration (the board top) or of one unit alone (UNIT=), from the open
@@ -54,6 +54,9 @@ object TimingCmd {
     val met = shown.fits && shown.fmaxMhz.exists(_ >= target)
     j("met") = met
     j("critical_path") = r("critical_path")
+    // the LUT-level proxy of the same netlist beside the routed clock (what the ecp5 rule is fitted on)
+    j("proxy") = ujson.Obj("lut_levels" -> r.value.getOrElse("proxy_lut_levels", ujson.Null),
+      "fmax_mhz" -> r.value.getOrElse("proxy_fmax_mhz", ujson.Null), "rule" -> Timing.forFamily("ecp5").rule)
     for (k <- Seq("lut4", "ff", "mult18", "ebr", "carry", "lutram", "wrapper_ff", "fits", "first_overflow", "seed")) j(k) = r(k)
     j("seeds") = seeds; j("fmax_mhz_seeds") = ujson.Arr.from(runs.map(x => x.result("fmax_mhz")))
     j("fmax_reported") = if (seeds > 1) "median" else "the one seed"
@@ -88,6 +91,10 @@ object TimingCmd {
         e.println(f"  critical path ${c("ns").num}%.2f ns (logic ${c("logic_ns").num}%.2f, routing ${c("routing_ns").num}%.2f), " +
           f"${c("logic_levels").num}%.0f logic elements: ${c("from").str} -> ${c("to").str}")
       case _ => e.println("  not routed (does not fit)")
+    }
+    j("proxy")("lut_levels") match {
+      case ujson.Num(n) => e.println(f"  proxy: $n%.0f LUT levels, ~${j("proxy")("fmax_mhz").num}%.0f MHz by ${j("proxy")("rule").str}")
+      case _ => ()
     }
   }
 }

@@ -372,6 +372,17 @@ object Fp {
   /** mulCore's product in two halves of the multiplier b (pipelined wide multipliers): a * b's low bits and a *
     * b's high bits, summed in the next segment.
     */
+  /** A product's operands unpacked, with the result's sign and special case: what the DSP blocks start from. */
+  class MulIn(f: FpFormat) extends Bundle {
+    val sigA = UInt((f.manBits + 1).W)
+    val sigB = UInt((f.manBits + 1).W)
+    val expA = UInt(f.expBits.W)
+    val expB = UInt(f.expBits.W)
+    val sign = Bool()
+    val toPos = Bool()
+    val sp = new Special
+  }
+
   /** A product's pieces between the steps of its sum: piece i (at bit offset offs(i) of the product, which the
     * hardware does not carry) of width widths(i), with the rest of the result beside them.
     */
@@ -400,16 +411,24 @@ object Fp {
     val tiled = tiles.length > 1
     var offs = tiles.map { case ((a0, _), (b0, _)) => a0 + b0 }
     var widths = tiles.map { case ((a0, a1), (b0, b1)) => (a1 - a0) + (b1 - b0) }
-    var parts = pipe.op(Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt)), if (tiled) Depth.mul(18) /* one DSP block */ else Depth.mul(n)) { v =>
+    // the operands' fields first (the hidden bit is an OR of the exponent field), so a register can go between
+    // them and the DSP blocks: the blocks' multiply is most of a stage on its own
+    val in = pipe.op(Seq(a, b) ++ toPos.map(t => t.map(0)(_.asUInt)), Depth.reduce(f.manBits) + 1) { v =>
       val ua = new Unpacked(f, v(0))
       val ub = new Unpacked(f, v(1))
-      val o = Wire(new MulParts(widths, ew))
+      val o = Wire(new MulIn(f))
+      o.sigA := ua.sig; o.sigB := ub.sig; o.expA := ua.exp; o.expB := ub.exp
       o.sign := ua.sign ^ ub.sign
-      o.exp := (ua.exp.zext.pad(ew) + ub.exp.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
       o.toPos := (if (toPos.isDefined) v(2)(0) else false.B)
       val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
       o.sp := special(isNaN, ua.isInf || ub.isInf, ua.isZero || ub.isZero, o.sign)
-      for ((((a0, a1), (b0, b1)), i) <- tiles.zipWithIndex) o.parts(i) := ua.sig(a1 - 1, a0) * ub.sig(b1 - 1, b0)
+      o
+    }
+    var parts = pipe.step(in, Depth.dsp(pipe.dsp)) { x =>
+      val o = Wire(new MulParts(widths, ew))
+      o.sign := x.sign; o.toPos := x.toPos; o.sp := x.sp
+      o.exp := (x.expA.zext.pad(ew) + x.expB.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
+      for ((((a0, a1), (b0, b1)), i) <- tiles.zipWithIndex) o.parts(i) := x.sigA(a1 - 1, a0) * x.sigB(b1 - 1, b0)
       o
     }
     // pairwise sums down to two pieces; the last sum feeds the rounding in the same step (as a single product does)

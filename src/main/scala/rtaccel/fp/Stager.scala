@@ -12,15 +12,17 @@ final case class Timed[+T <: Data](v: T, at: Int, depth: Int) {
   def map[U <: Data](levels: Int)(fn: T => U): Timed[U] = Timed(fn(v), at, depth + levels)
 }
 
-/** The widest unsigned operands one DSP block of a family multiplies without fabric logic (boards/timing.json's
-  * `dsp_unsigned_bits`): Xilinx's DSP48 (25 x 18 signed) 24 x 17, Lattice ECP5's MULT18X18D 18 x 18.
+/** A family's DSP block (boards/timing.json): the widest unsigned operands it multiplies without fabric logic
+  * (`dsp_unsigned_bits`: Xilinx's DSP48, 25 x 18 signed, 24 x 17; Lattice ECP5's MULT18X18D 18 x 18) and its
+  * unregistered multiply in LUT levels (`dsp_levels`, which the timing proxy counts too: area.Levels).
   */
-final case class DspShape(a: Int, b: Int) {
+final case class DspShape(a: Int, b: Int, levels: Int = 4) {
   require(a >= 2 && b >= 2, s"a DSP block multiplies at least 2 x 2 bits (got $a x $b)")
-  override def toString: String = s"${a}x$b"
+  require(levels >= 0, s"a DSP block's levels must be >= 0 (got $levels)")
+  override def toString: String = s"${a}x$b/$levels"
 }
 object DspShape {
-  val Dsp48: DspShape = DspShape(24, 17)
+  val Dsp48: DspShape = DspShape(24, 17, 4)
 }
 
 /** Register placement of a pipelined datapath (PIPELINE=, docs/timing.md). `budget` = the most LUT levels
@@ -121,6 +123,6 @@ object Depth {
   def carry(n: Int): Int = 1 + n / 24
   /** A leading-zero count of n bits (a tree of 2:1 selections, two per LUT). */
   def lzc(n: Int): Int = (log(2, n) + 1) / 2 + 1
-  /** A multiplier of n x n bits: in DSP slices with their cascade, counted as LUT levels of the same delay. */
-  def mul(n: Int): Int = if (n <= 18) 4 else 6
+  /** A product in one DSP block: the block's multiply and its post-adder (the proxy counts the same: area.Levels). */
+  def dsp(d: DspShape): Int = d.levels + 1
 }

@@ -143,7 +143,7 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
         // dispatch: at most one, to the lowest-numbered free TU, the oldest accepted ray
         val fires = freeIdx.filter(i => dut.io.tuRay(i).valid.peek().litToBoolean).toSeq
         assert(fires.length <= 1, s"$what: rays handed to TUs ${fires.mkString(",")} at once")
-        val readyAt = accepted.headOption.map(_._2 + lat + 1)
+        val readyAt = accepted.headOption.map(_._2 + dut.dispatchLatency)
         if (freeIdx.nonEmpty && readyAt.exists(_ <= cycle))
           assert(fires.nonEmpty, s"$what: a prepared ray waits while TUs ${freeIdx.mkString(",")} are free")
         for (i <- fires) {
