@@ -32,10 +32,10 @@ TRIS       = $$(tools/tris $(SCENE))
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator z3 run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area area-fp timing cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity paper
+        yosys verilog area area-fp timing timing-fit cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity paper
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | timing | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity | paper   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | timing | timing-fit | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity | paper   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -192,6 +192,12 @@ TIMING_SEEDS ?= 1
 timing: deps
 	@$(JAVA) rtaccel.cli.TimingCmd --config $(VCONFIG) $(PLATFORM_KNOBS) --seeds $(TIMING_SEEDS) \
 	  $(if $(UNIT),--unit $(UNIT)) $(if $(SPEED),--speed $(SPEED)) $(if $(OUT),--out $(OUT))
+
+# The ecp5 rule of the timing proxy fitted to every route in build/timing-cache (docs/area.md "Routed timing"):
+# each route's proxy levels and routed clock against the fitted rule and the current one; WRITE=1 puts the fit
+# into boards/timing.json. JSON last line; exit 2 when too few routes are cached to fit.
+timing-fit: deps
+	@$(JAVA) rtaccel.cli.TimingFit $(if $(WRITE),--write $(WRITE)) $(if $(TIMING_CACHE),--cache $(TIMING_CACHE))
 
 # The fitted cost model (FIDELITY=model) from the syntheses of boards/cost-calibration.json (cached per circuit);
 # writes boards/cost-model.json with its error on the validation configurations.
