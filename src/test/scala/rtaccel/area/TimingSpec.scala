@@ -51,12 +51,25 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     // the path's delay is the clock's period (one clock, register to register)
     assert(math.abs(1000.0 / c("ns").num - fmax) / fmax < 0.02, s"${c("ns").num} ns vs $fmax MHz")
     assert(j("seed").num == 1 && j("speed_grade").num == 8 && j("yosys_version").str.nonEmpty && j("nextpnr_version").str.nonEmpty)
+    // the proxy's levels of the same (flat) netlist, and the clock the ecp5 rule gives them
+    val px = j("proxy")
+    assert(px("lut_levels").num >= 1 && math.abs(px("fmax_mhz").num - Timing.forFamily("ecp5").fmaxMhz(px("lut_levels").num.toInt)) < 1e-6, px.toString)
     assert(!j("cached").bool && err.contains("[timing] yosys") && err.contains("[timing] nextpnr"), err)
     val o = dir.resolve(s"o${Seq("--unit", "BurstSplitter").hashCode}")
     assert(Files.isRegularFile(o.resolve("timing.json")) && Files.readString(o.resolve("nextpnr.log")).contains("Max frequency for clock"))
     val (c2, out2, err2) = timing("--unit", "BurstSplitter")
     val j2 = last(out2)
     assert(c2 == 0 && j2("cached").bool && j2("fmax_mhz").num == fmax, err2)
+  }
+
+  test("nextpnr's utilisation lines: the first cell type over its capacity when placement ran out of room, else none") {
+    val log = Files.createTempFile("nextpnr", ".log")
+    val use = "Info: Device utilisation:\nInfo: \t              DP16KD:      36/    208    17%\n" +
+      "Info: \t          TRELLIS_FF:   64509/  83640    77%\nInfo: \t        TRELLIS_COMB:   85513/  83640   102%\n"
+    Files.writeString(log, use + "ERROR: Unable to find legal placement for all cells, design is probably at utilisation limit.\n")
+    assert(Nextpnr.overflow(log).contains(("TRELLIS_COMB", 85513L, 83640L)))
+    Files.writeString(log, use + "ERROR: some other failure\n")
+    assert(Nextpnr.overflow(log).isEmpty)
   }
 
   test("a target the unit misses exits 3 with the JSON printed last") {
