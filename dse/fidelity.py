@@ -102,14 +102,15 @@ def row(kind, c, scene, cs, rtl):
     t = rtl["result"] if rtl and rtl["status"] == st.OK else None
     if m:
         n = m["rays"] or 1
-        r.update(rays=m["rays"], mva_rays_per_s=m["predicted_rays_per_s"], mva_no_hol_rays_per_s=m.get("predicted_rays_per_s_no_hol"),
+        r.update(rays=m["rays"], clock_mhz=m.get("clock_mhz"), clock_source=m.get("clock_source"),
+                 mva_rays_per_s=m["predicted_rays_per_s"], mva_no_hol_rays_per_s=m.get("predicted_rays_per_s_no_hol"),
                  bw_bound_rays_per_s=m["bandwidth_bound_rays_per_s"], cachesim_node_miss_rate=_miss(m, "node_cache"),
                  cachesim_prim_miss_rate=_miss(m, "prim_cache"), cachesim_dram_bytes_per_ray=m["dram_bytes_per_ray"],
                  cachesim_wall_s_per_ray=((m.get("trace_s") or 0.0) + (m.get("wall_s") or 0.0)) / n,
                  mva_wall_s_per_ray=(m["predict_s"] / n) if m.get("predict_s") is not None else None)
     if t:
         n = t["rays"] or 1
-        r.update(rtl_rays_per_s=t["rays_per_s_at_clock"], rtl_node_miss_rate=_miss(t, "node_cache"),
+        r.update(clock_mhz=t.get("clock_mhz"), clock_source=t.get("clock_source"), rtl_rays_per_s=t["rays_per_s_at_clock"], rtl_node_miss_rate=_miss(t, "node_cache"),
                  rtl_prim_miss_rate=_miss(t, "prim_cache"), rtl_dram_bytes_per_ray=t.get("dram_bytes_per_ray"),
                  rtl_wall_s_per_ray=(rtl["wall_s"] or 0.0) / n, rtl_sim_s_per_ray=(t.get("sim_wall_s") or 0.0) / n)
     if m and t:
@@ -123,7 +124,7 @@ def row(kind, c, scene, cs, rtl):
     return r
 
 
-COLUMNS = ["scene", "point", "cache", "tus", "mppl", "config", "node_cache", "node_policy", "rays",
+COLUMNS = ["scene", "point", "cache", "tus", "mppl", "config", "node_cache", "node_policy", "rays", "clock_mhz", "clock_source",
            "rtl_rays_per_s", "mva_rays_per_s", "mva_err", "mva_no_hol_rays_per_s", "mva_no_hol_err",
            "bw_bound_rays_per_s", "bw_bound_err",
            "rtl_node_miss_rate", "cachesim_node_miss_rate", "node_miss_diff",

@@ -34,7 +34,8 @@ def summarise(sp, config, scenes, rows):
             "rays_per_dram_byte": rungs.geomean(x["rays_per_dram_byte"] for x in m),
             "dram_bytes_per_ray": statistics.fmean(x["dram_bytes_per_ray"] for x in m),
             "node_miss_rate": statistics.fmean(x["node_miss_rate"] for x in m),
-            "cache_kib": m[0]["cache_kib"], "per_scene": {sc["name"]: x for sc, x in zip(scenes, m)}}
+            "cache_kib": m[0]["cache_kib"], "clock_mhz": m[0].get("clock_mhz"), "clock_source": m[0].get("clock_source"),
+            "per_scene": {sc["name"]: x for sc, x in zip(scenes, m)}}
     a = rows.get("area", {}).get((pid, ""))
     if a is not None:
         if a["status"] in AREA_OK:
@@ -211,7 +212,8 @@ def write(sp, scenes, out, version, sums, rtl, confirmed, counts, stats, times):
     front, objs = predicted_front(sp, sums)
     on_front = {s["point"] for s in front}
     knobs = [k for k in KNOBS if any(k in s["config"] for s in sums)]
-    mcols = ["rays_per_s", "bw_bound_rays_per_s", "rays_per_dram_byte", "dram_bytes_per_ray", "node_miss_rate", "cache_kib"]
+    mcols = ["rays_per_s", "bw_bound_rays_per_s", "rays_per_dram_byte", "dram_bytes_per_ray", "node_miss_rate", "cache_kib",
+             "clock_mhz", "clock_source"]
     acols = ["lut", "lutram", "ff", "dsp", "bram36", "fits"]
     cols = ["point", *knobs, "feasible", "on_front", "confirmed", *[f"model_{c}" for c in mcols], *[f"area_{c}" for c in acols],
             *[f"yosys_{c}" for c in acols], "rtl_status", "rtl_rays_per_s", "notes", "errors"]

@@ -72,11 +72,16 @@ def metrics(fidelity, result):
         return {"rays_per_s": result["predicted_rays_per_s"], "bw_bound_rays_per_s": result["bandwidth_bound_rays_per_s"],
                 "dram_bytes_per_ray": bpr, "rays_per_dram_byte": 1 / bpr if bpr > 0 else math.inf,
                 "node_miss_rate": result["node_cache"]["miss_rate"], "prim_miss_rate": result["prim_cache"]["miss_rate"],
-                "cache_kib": cache_kib(result)}
+                "cache_kib": cache_kib(result), **clock(result)}
     bpr = result.get("dram_bytes_per_ray") or 0.0
     return {"rays_per_s": result["rays_per_s_at_clock"], "dram_bytes_per_ray": bpr,
             "rays_per_dram_byte": 1 / bpr if bpr > 0 else math.inf,
-            "node_miss_rate": (result.get("node_cache") or {}).get("miss_rate")}
+            "node_miss_rate": (result.get("node_cache") or {}).get("miss_rate"), **clock(result)}
+
+
+def clock(result):
+    """The clock a rays/s figure is at and where it comes from (given, board, proxy, routed)."""
+    return {"clock_mhz": result.get("clock_mhz"), "clock_source": result.get("clock_source")}
 
 
 def limits(constraints, cost):

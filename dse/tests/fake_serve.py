@@ -27,7 +27,10 @@ def answer(cmd, a):
         if env("FAKE_SERVE_CRASH_TUS") == str(tus):
             sys.exit(134)
         bpr = 1000 / (1 + nc / 64)
-        return 0, {"scene": a["scene-label"], "rtaccel": "fake-1", "config": a.get("config", "fit"), "tus": tus, "rays": 100,
+        clk = clock(a)
+        if isinstance(clk, str):
+            return 2, None, clk
+        return 0, {"scene": a["scene-label"], "rtaccel": "fake-1", "config": a.get("config", "fit"), "tus": tus, "rays": 100, **clk,
                    "node_accesses": 1000, "node_bytes_per_ray_nocache": 1280.0, "predicted_rays_per_s": pred,
                    "bandwidth_bound_rays_per_s": 2 * pred, "dram_bytes_per_ray": bpr,
                    "node_cache": {"entries": nc, "miss_rate": 1 / (1 + nc / 64)}, "prim_cache": {"entries": 0, "miss_rate": 1.0},
@@ -51,6 +54,17 @@ def answer(cmd, a):
             return 3, j, "check failed: mismatch_vs_model"
         return 0, j, None
     return 2, None, f"unknown cmd '{cmd}'"
+
+
+def clock(a):
+    """The clock a run names, as the real commands do: CLOCK_MHZ=<MHz> (given), none (board: 150 MHz) or
+    CLOCK_MHZ=fmax, which the real JVM resolves from a cached measurement: FAKE_SERVE_FMAX_MHZ stands for one."""
+    c = a.get("clock-mhz")
+    if c == "fmax":
+        f = os.environ.get("FAKE_SERVE_FMAX_MHZ")
+        return ({"clock_mhz": float(f), "clock_source": "proxy"} if f else
+                "CLOCK_MHZ=fmax: no measured clock of this circuit is cached; make one with `make area ...`")
+    return {"clock_mhz": float(c), "clock_source": "given"} if c else {"clock_mhz": 150.0, "clock_source": "board"}
 
 
 def main():

@@ -242,3 +242,19 @@ def test_yosys_synthesizes_exactly_the_confirmed_points_near_a_limit_and_re_deci
     assert rc == 0 and j2["evaluated"] == 0 and len(requests(log)) == n
     assert j2["by_fidelity"]["yosys"] == {"evaluated": 0, "skipped": 3, "failed": 0}
     assert (j2["confirmed_yosys"], j2["pareto"], j2["confirmed_rtl"]) == (j["confirmed_yosys"], j["pareto"], j["confirmed_rtl"])
+
+
+def test_clock_fmax_ranks_at_the_measured_clock_and_names_it(tmp_path, capsys, local_ray):
+    sp, out = spaces.tiny(tmp_path, axes='TUS = [1, 2]\nCLOCK_MHZ = ["fmax", 200]'), tmp_path / "out"
+    jv, _ = java(tmp_path, FMAX_MHZ=123.5)
+    rc, j = dse(capsys, sp, out, jv)
+    assert rc == 0 and j["failed"] == 0, stored(out)
+    rows = list(csv.DictReader(l for l in (out / "points.csv").read_text().splitlines() if not l.startswith("#")))
+    clocks = {(r["TUS"], r["CLOCK_MHZ"]): (r["model_clock_mhz"], r["model_clock_source"]) for r in rows}
+    assert clocks[("1", "fmax")] == ("123.5", "proxy") and clocks[("2", "200")] == ("200", "given"), clocks
+    # without a measured clock the JVM refuses the point: recorded as failed with its message, the sweep goes on
+    out2 = tmp_path / "out2"
+    jv2, _ = java(tmp_path)
+    rc, j = dse(capsys, sp, out2, jv2)
+    assert rc == 0 and j["failed"] == 2, j
+    assert any("CLOCK_MHZ=fmax" in (e or "") for _, _, _, e in stored(out2))

