@@ -72,7 +72,8 @@ object Flags {
     f("seeds", "nextpnr seeds 1..N, the median run reported (TIMING_SEEDS=, default 1)"),
     f("speed", "ECP5 speed grade 6, 7 or 8 (SPEED=; default the board's)"))
   val timingFit: Seq[Flag] = Seq(f("cache", "routing cache folder (default build/timing-cache)"),
-    f("write", "1: write the fitted ecp5 rule into boards/timing.json (WRITE=1)"))
+    f("write", "1: write the fitted ecp5 rule into boards/timing.json (WRITE=1)"),
+    f("timing", "the timing rules file (default boards/timing.json)"))
   val areaFp: Seq[Flag] = model.filter(fl => Set("board", "catalog", "pipeline", "clock-mhz")(fl.name)) ++ Seq(
     f("ops", "fp32 operations to synthesize, comma-separated (OPS=; default all)"), f("out", "output folder"),
     f("cache", "synthesis cache folder"))

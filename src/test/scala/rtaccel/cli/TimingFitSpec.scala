@@ -27,6 +27,19 @@ class TimingFitSpec extends AnyFunSuite {
     assert(math.abs(o - 2.5) < 1e-9 && math.abs(l - 1.25) < 1e-9)
   }
 
+  test("--write 1 puts the fitted figures and their source into the ecp5 entry and leaves the file valid JSON") {
+    val exact = Seq(4, 8, 12).map(lv => (s"U$lv", lv, 1000.0 / (2.5 + 1.25 * lv), Levels.version))
+    val t = Files.createTempFile("timing", ".json")
+    Files.copy(rtaccel.area.Timing.defaultPath, t, java.nio.file.StandardCopyOption.REPLACE_EXISTING)
+    Console.withOut(new java.io.ByteArrayOutputStream) {
+      TimingFit.main0(Args(Map("cache" -> cache(exact).toString, "write" -> "1", "timing" -> t.toString)))
+    }
+    val e = ujson.read(Files.readString(t))("families")("ecp5")
+    assert(e("level_ns").num == 1.25 && e("overhead_ns").num == 2.5 && e("source").str.startsWith("fitted by make timing-fit to 3 routes"), e.toString)
+    // the other families are untouched
+    assert(ujson.read(Files.readString(t))("families")("xc5v") == ujson.read(Files.readString(rtaccel.area.Timing.defaultPath))("families")("xc5v"))
+  }
+
   test("too few routes to fit: exit 2 naming the commands that make more") {
     val d = cache(Seq(("A", 4, 150.0, Levels.version), ("B", 4, 140.0, Levels.version), ("C", 4, 145.0, Levels.version)))
     val e = intercept[InputError](TimingFit.main0(Args(Map("cache" -> d.toString))))
