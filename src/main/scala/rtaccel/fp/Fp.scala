@@ -369,9 +369,6 @@ object Fp {
     */
   def mulWide(f: FpFormat, fo: FpFormat, a: UInt, b: UInt): UInt = mulCore(f, a, b, fo, None)
 
-  /** mulCore's product in two halves of the multiplier b (pipelined wide multipliers): a * b's low bits and a *
-    * b's high bits, summed in the next segment.
-    */
   /** A product's operands unpacked, with the result's sign and special case: what the DSP blocks start from. */
   class MulIn(f: FpFormat) extends Bundle {
     val sigA = UInt((f.manBits + 1).W)
@@ -400,6 +397,10 @@ object Fp {
     // by offset in the product, so the pairwise sums join neighbours
     (for (ca <- cuts(dsp.a); cb <- cuts(dsp.b)) yield (ca, cb)).sortBy { case ((a0, _), (b0, _)) => (a0 + b0, a0) }
   }
+
+  /** The pieces `idx` of a product (piece i at bit offs(i)) added, as the `width` bits from bit `base` up. */
+  private def sumOf(x: MulParts, idx: Seq[Int], offs: Seq[Int], base: Int, width: Int): UInt =
+    idx.map(i => x.parts(i).pad(width) << (offs(i) - base)).reduce(_ +& _)(width - 1, 0)
 
   private def mulCore(pipe: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt], fo: FpFormat, toPos: Option[Timed[Bool]]): Timed[UInt] = {
     val ew = expW(f) max expW(fo)
@@ -442,8 +443,7 @@ object Fp {
         val o = Wire(new MulParts(nWidths, ew))
         o := DontCare
         o.exp := x.exp; o.sign := x.sign; o.toPos := x.toPos; o.sp := x.sp
-        for ((g, j) <- pairs.zipWithIndex)
-          o.parts(j) := g.map(i => x.parts(i).pad(nWidths(j)) << (oo(i) - nOffs(j))).reduce(_ +& _)(nWidths(j) - 1, 0)
+        for ((g, j) <- pairs.zipWithIndex) o.parts(j) := sumOf(x, g, oo, nOffs(j), nWidths(j))
         o
       }
       offs = nOffs; widths = nWidths
@@ -451,8 +451,7 @@ object Fp {
     val oo = offs
     val r = pipe.step(parts, if (tiled) Depth.carry(2 * n) else 0) { x =>
       // 2m+2 bits, binary point after the top bit pair
-      val prod = oo.indices.map(i => x.parts(i).pad(2 * n) << oo(i)).reduce(_ +& _)
-      roundIn(x.sign, x.exp, prod(2 * n - 1, 0), false.B, toPos.map(_ => x.toPos), x.sp)
+      roundIn(x.sign, x.exp, sumOf(x, oo.indices, oo, 0, 2 * n), false.B, toPos.map(_ => x.toPos), x.sp)
     }
     roundPackT(pipe, fo, r, directed = toPos.isDefined)
   }
