@@ -24,34 +24,43 @@ import scala.collection.mutable
   * Yosys' `ltp` counts every cell on its path in one module alone; its figure is kept beside ours (`ltp_cells`).
   */
 object Levels {
-  /** Bump when the rules above change: it is part of make area's cache key (the netlist is not kept). */
-  val version = 2
+  /** Bump when the rules above change: it is part of make area's cache key (the netlist is not kept).
+    * 3: the deepest path's named nets are kept (`Result.paths`).
+    */
+  val version = 3
+
+  /** Per module: the deepest path's LUT levels, and the named nets it passes, start to end ("inst.port" where it
+    * crosses a submodule; Yosys' own `$`-names left out), so that a deep module says where to cut.
+    */
+  final case class Result(levels: Map[String, Int], paths: Map[String, Seq[String]])
 
   private val NegInf = Int.MinValue / 4
 
   /** LUT levels of the deepest path of every (non-blackbox) module in a `write_json` netlist; `dspLevels` is
     * the family's unregistered DSP multiplier in levels (FamilyTiming.dspLevels).
     */
-  def ofNetlist(netlist: Path, dspLevels: Int): Map[String, Int] = {
+  def ofNetlist(netlist: Path, dspLevels: Int): Result = {
     // read as a stream of bytes: the whole platform's netlist is hundreds of MB
     val j = ujson.read(ujson.Readable.fromPath(netlist))
     ofModules(j("modules").obj.iterator.map { case (n, m) => Yosys.clean(n) -> m }.toMap, dspLevels)
   }
 
-  private[area] def ofModules(mods: Map[String, ujson.Value], dspLevels: Int): Map[String, Int] = {
+  private[area] def ofModules(mods: Map[String, ujson.Value], dspLevels: Int): Result = {
     val own = mods.collect { case (n, m) if !isBox(m) => n -> m }
     val summaries = mutable.Map[String, Summary]()
     val deepest = mutable.Map[String, Int]()
+    val paths = mutable.Map[String, Seq[String]]()
     // children first (the hierarchy is a DAG; firtool emits no recursion)
     def visit(n: String, path: Set[String]): Unit = if (!summaries.contains(n) && !path(n)) {
       val m = own(n)
       for (c <- cells(m); t = Yosys.clean(c("type").str) if own.contains(t)) visit(t, path + n)
       val g = Graph.of(m, own.keySet, summaries, dspLevels)
-      deepest(n) = g.deepest
+      val (d, trail) = g.deepestPath
+      deepest(n) = d; paths(n) = trail
       summaries(n) = g.summary
     }
     own.keys.foreach(visit(_, Set.empty))
-    deepest.toMap
+    Result(deepest.toMap, paths.toMap)
   }
 
   private def isBox(m: ujson.Value): Boolean =
@@ -103,6 +112,8 @@ object Levels {
     val readsBits = mutable.ArrayBuffer[mutable.ArrayBuffer[(Long, Int)]]() // (net bit, extra)
     val readsNodes = mutable.ArrayBuffer[mutable.ArrayBuffer[(Int, Int)]]() // (node, extra)
     val driver = mutable.HashMap[Long, Int]()
+    val label = mutable.ArrayBuffer[String]() // a named net the node drives ("" if none), for the path report
+    var bitName: Long => String = _ => ""
     var inPorts: Seq[(String, Array[Long])] = Nil
     var outPorts: Seq[(String, Array[Long])] = Nil
 
@@ -110,7 +121,7 @@ object Levels {
       * registered inputs), none for a cell whose paths start at the nets it reads.
       */
     def node(w: Int, b: Int = NegInf): Int = {
-      weight += w; base += b; readsBits += mutable.ArrayBuffer(); readsNodes += mutable.ArrayBuffer(); weight.length - 1
+      weight += w; base += b; readsBits += mutable.ArrayBuffer(); readsNodes += mutable.ArrayBuffer(); label += ""; weight.length - 1
     }
 
     private lazy val deps: Array[Array[(Int, Int)]] = weight.indices.map { c =>
@@ -138,20 +149,37 @@ object Levels {
       out.toArray
     }
 
-    /** Path values: v(c) = weight(c) + max(base, input bits' starts, max over reads (v(d) + extra)). */
-    private def eval(useBase: Boolean, start: Long => Int): Array[Int] = {
+    /** Path values: v(c) = weight(c) + max(base, input bits' starts, max over reads (v(d) + extra)). `from`, when
+      * given, records what each value came from: a node (>= 0), an input bit (-2 - bit) or the node's base (-1).
+      */
+    private def eval(useBase: Boolean, start: Long => Int, from: Array[Long] = null): Array[Int] = {
       val v = Array.fill(weight.length)(NegInf)
       for (c <- order) {
         var best = if (useBase) base(c) else NegInf
-        for ((b, x) <- portReads(c)) { val s = start(b); if (s > NegInf) best = best max (s + x) }
-        for ((d, x) <- deps(c)) if (v(d) > NegInf) best = best max (v(d) + x)
+        var arg = -1L
+        for ((b, x) <- portReads(c)) { val s = start(b); if (s > NegInf && s + x > best) { best = s + x; arg = -2 - b } }
+        for ((d, x) <- deps(c)) if (v(d) > NegInf && v(d) + x > best) { best = v(d) + x; arg = d }
         v(c) = if (best > NegInf) best + weight(c) else NegInf
+        if (from != null) from(c) = arg
       }
       v
     }
 
-    /** The deepest path in this module: from its registers, its input ports and its submodules' outputs. */
-    def deepest: Int = (eval(useBase = true, _ => 0) :+ 0).max
+    /** The deepest path in this module (from its registers, its input ports and its submodules' outputs) and the
+      * named nets along it, start first.
+      */
+    def deepestPath: (Int, Seq[String]) = {
+      val from = new Array[Long](weight.length)
+      val v = eval(useBase = true, _ => 0, from)
+      if (v.isEmpty || v.max <= 0) (0, Nil)
+      else {
+        var c = v.indices.maxBy(v(_))
+        val names = mutable.ArrayBuffer[String](label(c))
+        while (from(c) >= 0) { c = from(c).toInt; names += label(c) }
+        if (from(c) <= -2) names += bitName(-2 - from(c))
+        (v.max, names.reverseIterator.filter(_.nonEmpty).foldLeft(Vector.empty[String])((a, n) => if (a.lastOption.contains(n)) a else a :+ n))
+      }
+    }
 
     def summary: Summary = {
       val inBits = inPorts.flatMap(_._2).toSet
@@ -179,21 +207,32 @@ object Levels {
       val ports = m.obj.get("ports").map(_.obj.toSeq).getOrElse(Nil)
       g.inPorts = ports.collect { case (p, d) if d("direction").str == "input" => p -> bitsOf(d("bits")) }
       g.outPorts = ports.collect { case (p, d) if d("direction").str == "output" => p -> bitsOf(d("bits")) }
-      for (c <- cells(m)) {
+      // a bit's name: a net the source named (Yosys' own names start with `$`), with the bit's index in it
+      val names = mutable.HashMap[Long, String]()
+      for ((n, d) <- m.obj.get("netnames").map(_.obj.toSeq).getOrElse(Nil) if !n.startsWith("$") && !d.obj.get("hide_name").exists(_.num != 0)) {
+        val bits = bitsOf(d("bits"))
+        for ((b, i) <- bits.zipWithIndex if !names.contains(b)) names(b) = Yosys.clean(n) + (if (bits.length > 1) s"[$i]" else "")
+      }
+      g.bitName = b => names.getOrElse(b, "")
+      for ((cellName, c) <- m.obj.get("cells").map(_.obj.toSeq).getOrElse(Nil)) {
         val t = Yosys.clean(c("type").str)
         val conns = c("connections").obj.toSeq.map { case (p, b) => p -> bitsOf(b) }
         val dirs = c.obj.get("port_directions").map(_.obj).getOrElse(Map.empty[String, ujson.Value])
         def dirOf(p: String) = dirs.get(p).map(_.str).getOrElse("")
         val ins = conns.filter(x => dirOf(x._1) == "input"); val outs = conns.filter(x => dirOf(x._1) == "output")
-        def drive(n: Int, ports: Seq[(String, Array[Long])]): Unit = ports.foreach(_._2.foreach(g.driver(_) = n))
+        def drive(n: Int, ports: Seq[(String, Array[Long])]): Unit = {
+          ports.foreach(_._2.foreach(g.driver(_) = n))
+          if (g.label(n).isEmpty) g.label(n) = ports.iterator.flatMap(_._2).map(g.bitName).find(_.nonEmpty).getOrElse("")
+        }
         def read(n: Int, ports: Seq[(String, Array[Long])], extra: Int = 0): Unit = ports.foreach(_._2.foreach(b => g.readsBits(n) += (b -> extra)))
         if (own(t)) summaries.get(t) match {
           case Some(s) =>
             // the submodule: its inputs end paths `sink` deep; each output starts `src` deep and continues its inputs' paths
-            for ((q, bits) <- ins) { val n = g.node(0); read(n, Seq(q -> bits), s.sink.getOrElse(q, 0)) }
+            for ((q, bits) <- ins) { val n = g.node(0); read(n, Seq(q -> bits), s.sink.getOrElse(q, 0)); g.label(n) = s"${Yosys.clean(cellName)}.$q" }
             for ((p, bits) <- outs) {
               val n = g.node(0, s.src.getOrElse(p, 0))
               for ((q, qb) <- ins; x <- s.thru.get((q, p))) read(n, Seq(q -> qb), x)
+              g.label(n) = s"${Yosys.clean(cellName)}.$p"
               drive(n, Seq(p -> bits))
             }
           case None => () // a submodule on a recursion path (none in firtool output): a cut
@@ -228,7 +267,7 @@ object Levels {
     val g = new Graph
     weight.foreach(w => g.node(w, 0))
     for ((ds, c) <- deps.zipWithIndex; d <- ds) g.readsNodes(c) += (d -> 0)
-    g.deepest
+    g.deepestPath._1
   }
 
   private val ltpHead = """Longest topological path in (\S+) \(length=(\d+)\):""".r.unanchored

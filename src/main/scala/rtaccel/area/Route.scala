@@ -65,7 +65,7 @@ object Route {
     */
   private def proxy(work: Path, res: ujson.Obj): Unit = {
     val t = Timing.forFamily("ecp5")
-    val lv = (Levels.ofNetlist(work.resolve(netlist), t.dspLevels).values.toSeq :+ 0).max
+    val lv = (Levels.ofNetlist(work.resolve(netlist), t.dspLevels).levels.values.toSeq :+ 0).max
     res("proxy_lut_levels") = lv; res("proxy_levels_version") = Levels.version; res("proxy_fmax_mhz") = t.fmaxMhz(lv)
   }
 

@@ -11,7 +11,7 @@ import scala.collection.mutable
 final case class Synthesis(top: String, family: String, version: String, cache: Path, cached: Boolean,
                            resources: Map[String, Resources], instances: Map[String, Long],
                            levels: Map[String, Int], ltpCells: Map[String, Int], unknown: Set[String],
-                           mods: Map[String, Map[String, Long]]) {
+                           mods: Map[String, Map[String, Long]], paths: Map[String, Seq[String]] = Map.empty) {
   def total: Resources = resources(top)
   /** The module under the top with the deepest path (ties: the name first in order) and its LUT levels. */
   def deepest: (String, Int) = instances.keys.toSeq.sorted.map(m => m -> levels.getOrElse(m, 0)).maxBy(_._2)
@@ -50,7 +50,8 @@ object Synthesis {
       val levels = Levels.ofNetlist(work.resolve(Yosys.netlistFile), Timing.forFamily(family).dspLevels)
       Files.writeString(work.resolve(levelsFile), ujson.write(ujson.Obj("about" -> ("LUT levels of the deepest combinational " +
         "path per module (rtaccel.area.Levels)"), "top" -> top, "family" -> family, "yosys_version" -> version,
-        "rtaccel" -> rtaccelVersion, "modules" -> ujson.Obj.from(levels.toSeq.sorted.map { case (m, n) => m -> ujson.Num(n) })), indent = 2))
+        "rtaccel" -> rtaccelVersion, "modules" -> ujson.Obj.from(levels.levels.toSeq.sorted.map { case (m, n) => m -> ujson.Num(n) }),
+        "paths" -> ujson.Obj.from(levels.paths.toSeq.sortBy(_._1).map { case (m, ns) => m -> ujson.Arr.from(ns.map(ujson.Str(_))) })), indent = 2))
       // the netlist is large and everything it was kept for is in levels.json
       Files.delete(work.resolve(Yosys.netlistFile))
       // stat.json last: its presence is what marks a complete result
@@ -62,9 +63,11 @@ object Synthesis {
     val mods = Yosys.modules(stat)
     val per = Yosys.rollUp(mods, unknown)
     if (!per.contains(top)) throw new rtaccel.io.InputError(s"Yosys reported no module $top (see ${dir.resolve(Yosys.logFile)})")
-    val levels = ujson.read(Files.readString(dir.resolve(levelsFile)))("modules").obj.map { case (m, n) => m -> n.num.toInt }.toMap
+    val lj = ujson.read(Files.readString(dir.resolve(levelsFile)))
+    val levels = lj("modules").obj.map { case (m, n) => m -> n.num.toInt }.toMap
+    val paths = lj.obj.get("paths").fold(Map.empty[String, Seq[String]])(_.obj.map { case (m, a) => m -> a.arr.map(_.str).toSeq }.toMap)
     val ltp = Levels.parseLtp(Files.readString(dir.resolve(Yosys.ltpFile)))
-    Synthesis(top, family, version, dir, cached, per, countInstances(mods, top), levels, ltp, unknown.toSet, mods)
+    Synthesis(top, family, version, dir, cached, per, countInstances(mods, top), levels, ltp, unknown.toSet, mods, paths)
   }
 
   val levelsFile = "levels.json"

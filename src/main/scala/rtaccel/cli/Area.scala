@@ -50,12 +50,15 @@ object Area {
     val timing = Timing.forFamily(board.family)
     printTable(p.name, board, s.top, s.resources, s.instances, s.levels)
     System.err.println(f"  deepest path: $deepLevels LUT levels in $deepUnit, ~${timing.fmaxMhz(deepLevels)}%.0f MHz (a proxy: no placement or routing)")
+    val deepPath = s.paths.getOrElse(deepUnit, Nil)
+    if (deepPath.nonEmpty) System.err.println(s"  through: ${deepPath.mkString(" -> ")}")
     val j = header(p, board, "yosys", s.top)
     j("lut") = total.lut.toDouble; j("lutram") = total.lutram.toDouble; j("ff") = total.ff.toDouble; j("dsp") = total.dsp.toDouble
     j("bram36") = total.bram36; j("carry") = total.carry.toDouble
     j("units") = ujson.Obj.from(s.instances.toSeq.sortBy(_._1).map { case (m, n) =>
       m -> { val o = s.resources(m).json; o("instances") = n.toDouble; o("lut_levels") = s.levels.getOrElse(m, 0).toDouble
-        o("ltp_cells") = s.ltpCells.getOrElse(m, 0).toDouble; o } })
+        o("ltp_cells") = s.ltpCells.getOrElse(m, 0).toDouble
+        o("lut_levels_path") = ujson.Arr.from(s.paths.getOrElse(m, Nil).map(ujson.Str(_))); o } })
     // a proxy (no placement, routing or retiming; docs/area.md): the deepest unit and a rough clock from it
     j("lut_levels") = deepLevels.toDouble; j("lut_levels_unit") = deepUnit; j("fmax_mhz_proxy") = timing.fmaxMhz(deepLevels)
     j("fmax_rule") = timing.rule

@@ -53,7 +53,7 @@ class LevelsSpec extends AnyFunSuite {
     val box = ujson.Obj("attributes" -> ujson.Obj("blackbox" -> one), "cells" -> ujson.Obj())
     val f = Files.createTempFile("netlist", ".json")
     Files.writeString(f, ujson.write(ujson.Obj("modules" -> ujson.Obj("Top" -> top, "LUT6" -> box))))
-    assert(Levels.ofNetlist(f, 4) == Map("Top" -> 2))
+    assert(Levels.ofNetlist(f, 4).levels == Map("Top" -> 2))
   }
 
   test("a path through submodule ports counts the submodule's part: register to output, input through to output, input to register") {
@@ -66,10 +66,20 @@ class LevelsSpec extends AnyFunSuite {
       "lb" -> lut(12, 14), "f2" -> ff(14, 15), "lc" -> lut(13, 16), "ld" -> lut(16, 17), "f3" -> ff(17, 20))
     val got = Levels.ofModules(Map("Top" -> top, "Sub" -> sub), 4)
     // alone, Sub's deepest is its own 3 LUTs; in Top: 1 + 2 (through a -> y) + 1 = 4, and 3 (FF -> z) + 2 = 5
-    assert(got == Map("Sub" -> 3, "Top" -> 5))
+    assert(got.levels == Map("Sub" -> 3, "Top" -> 5))
+    // the path is reported by the nets the source named, crossing the submodule by its instance and port; a name
+    // Yosys made (`$...`) or hid is left out
+    top("netnames") = ujson.Obj(
+      "state" -> ujson.Obj("hide_name" -> 0, "bits" -> ujson.Arr(20)),
+      "zz" -> ujson.Obj("hide_name" -> 0, "bits" -> ujson.Arr(16, 17)),
+      "$abc$1" -> ujson.Obj("hide_name" -> 1, "bits" -> ujson.Arr(13)),
+      "hidden" -> ujson.Obj("hide_name" -> 1, "bits" -> ujson.Arr(14)))
+    assert(Levels.ofModules(Map("Top" -> top, "Sub" -> sub), 4).paths("Top") == Seq("u.z", "zz[0]", "zz[1]"))
+    // no LUT on any path: no levels and no path
+    assert(Levels.ofModules(Map("M" -> module(Seq(), "f1" -> ff(1, 2), "f2" -> ff(2, 1))), 4) == Levels.Result(Map("M" -> 0), Map("M" -> Nil)))
     // the first proxy cut paths at submodule instances: without them Top would read 2
     val flat = module(Seq(), "f1" -> ff(20, 10), "la" -> lut(10, 11), "lb" -> lut(12, 14), "f2" -> ff(14, 15), "lc" -> lut(13, 16), "ld" -> lut(16, 17), "f3" -> ff(17, 20))
-    assert(Levels.ofModules(Map("Top" -> flat), 4) == Map("Top" -> 2))
+    assert(Levels.ofModules(Map("Top" -> flat), 4).levels == Map("Top" -> 2))
   }
 
   test("an unregistered DSP block is its family's levels plus its post-adder; registered ports cut the path") {
@@ -78,20 +88,20 @@ class LevelsSpec extends AnyFunSuite {
         Map("AREG" -> regs, "BREG" -> regs, "MREG" -> regs, "PREG" -> regs))
     // FF -> LUT -> DSP -> LUT -> FF with the family's 5 levels: 1 + 5 + 1 + 1
     val comb = module(Seq(), "f1" -> ff(9, 1), "l1" -> lut(1, 2), "d" -> dsp(2, 3, zero), "l2" -> lut(3, 4), "f2" -> ff(4, 9))
-    assert(Levels.ofModules(Map("M" -> comb), 5) == Map("M" -> 8))
+    assert(Levels.ofModules(Map("M" -> comb), 5).levels == Map("M" -> 8))
     // a second block cascaded behind the first adds its post-adder: 1 + 5 + 1 + 1 + 1
     val cas = module(Seq(), "f1" -> ff(9, 1), "l1" -> lut(1, 2), "d1" -> dsp(2, 3, zero, pcout = Some(5)),
       "d2" -> dsp(6, 7, zero, pcin = Some(5)), "l2" -> lut(7, 4), "f2" -> ff(4, 9))
-    assert(Levels.ofModules(Map("M" -> cas), 5) == Map("M" -> 9))
+    assert(Levels.ofModules(Map("M" -> cas), 5).levels == Map("M" -> 9))
     // with its input, M and P registers inside the block, the block's own multiply is the deepest (5 levels) and the
     // LUTs on each side stand alone
     val reg = module(Seq(), "f1" -> ff(9, 1), "l1" -> lut(1, 2), "l0" -> lut(2, 5), "d" -> dsp(5, 3, one), "l2" -> lut(3, 4), "f2" -> ff(4, 9))
-    assert(Levels.ofModules(Map("M" -> reg), 5) == Map("M" -> 5))
-    assert(Levels.ofModules(Map("M" -> reg), 1) == Map("M" -> 2))
+    assert(Levels.ofModules(Map("M" -> reg), 5).levels == Map("M" -> 5))
+    assert(Levels.ofModules(Map("M" -> reg), 1).levels == Map("M" -> 2))
     // ECP5's MULT18X18D as Yosys infers it (no register): the same rule with ECP5's levels
     val ecp = module(Seq(), "f1" -> ff(9, 1), "m" -> cell("MULT18X18D", Map("A0" -> Seq(1)), Map("P0" -> Seq(3)),
       Map("REG_INPUTA_CLK" -> "NONE", "REG_INPUTB_CLK" -> "NONE", "REG_OUTPUT_CLK" -> "NONE", "REG_PIPELINE_CLK" -> "NONE")), "l2" -> lut(3, 4), "f2" -> ff(4, 9))
-    assert(Levels.ofModules(Map("M" -> ecp), 3) == Map("M" -> 5))
+    assert(Levels.ofModules(Map("M" -> ecp), 3).levels == Map("M" -> 5))
   }
 
   test("an asynchronous LUT-RAM read is a level from its address; its write ends the path") {
@@ -99,10 +109,10 @@ class LevelsSpec extends AnyFunSuite {
     val ram = cell("RAM64X1D", Map("DPRA0" -> Seq(2), "D" -> Seq(12), "WE" -> Seq(1)), Map("DPO" -> Seq(3), "SPO" -> Seq(13)))
     val m = module(Seq(), "f1" -> ff(9, 1), "l1" -> lut(1, 2), "r" -> ram, "l2" -> lut(3, 4), "f2" -> ff(4, 9),
       "l3" -> lut(1, 11), "l4" -> lut(11, 12))
-    assert(Levels.ofModules(Map("M" -> m), 4) == Map("M" -> 3))
+    assert(Levels.ofModules(Map("M" -> m), 4).levels == Map("M" -> 3))
     // ECP5's distributed RAM reads the same way
     val dpr = cell("TRELLIS_DPR16X4", Map("RAD" -> Seq(2), "DI" -> Seq(12), "WAD" -> Seq(1)), Map("DO" -> Seq(3)))
     val e = module(Seq(), "f1" -> ff(9, 1), "l1" -> lut(1, 2), "r" -> dpr, "l2" -> lut(3, 4), "f2" -> ff(4, 9))
-    assert(Levels.ofModules(Map("M" -> e), 3) == Map("M" -> 3))
+    assert(Levels.ofModules(Map("M" -> e), 3).levels == Map("M" -> 3))
   }
 }

@@ -42,12 +42,27 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
   val tagBits: Int = 32 - setBits
   private def entryType = new SetEntry(ways, tagBits, pol.stateBits, levelBits)
   private val mem = SyncReadMem(sets, entryType, ruw)
+  private val addrBits = math.max(1, setBits)
 
   def setOf(line: UInt): UInt = if (setBits == 0) 0.U(1.W) else line(setBits - 1, 0)
   def tagOf(line: UInt): UInt = line(31, setBits)
 
-  /** Starts a read of `line`'s set; the result is the entry one cycle later. */
-  def read(line: UInt): SetEntry = mem.read(setOf(line), true.B)
+  // the port: `read` names the set to read, `update` the write; set once each
+  private val rSet = WireDefault(0.U(addrBits.W))
+  private val wEn = WireDefault(false.B)
+  private val wSet = WireDefault(0.U(addrBits.W))
+  private val wData = WireDefault(emptyEntry)
+  /** One lookup per two cycles never uses what is read in the cycle of a write (the decision it belongs to has
+    * just left), so reads and writes share one read-write port: a block RAM's single port, which a synthesis that
+    * keeps the memory's module apart (Yosys, hierarchical) can map to block RAM; a read port and a write port with
+    * a clock each it can only map to LUT RAM. TAG_FORWARD=1 reads while the decision before writes: two ports.
+    */
+  private val rData: SetEntry =
+    if (ruw == SyncReadMem.Undefined) mem.readWrite(Mux(wEn, wSet, rSet), wData, true.B, wEn)
+    else { when(wEn) { mem.write(wSet, wData) }; mem.read(rSet, true.B) }
+
+  /** Starts a read of `line`'s set; the result is the entry one cycle later (undefined after a cycle that wrote). */
+  def read(line: UInt): SetEntry = { rSet := setOf(line); rData }
 
   /** The empty set of reset, written by the init sweep. */
   def emptyEntry: SetEntry = {
@@ -84,8 +99,8 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
     */
   def update(line: UInt, d: Decision, en: Bool, clearing: Bool, clearSet: UInt): Unit = {
     val clearThis = clearing && clearSet < sets.U
-    when(clearThis || (!clearing && en && (d.hit || d.fill))) {
-      mem.write(Mux(clearThis, clearSet(math.max(1, setBits) - 1, 0), setOf(line)), Mux(clearThis, emptyEntry, d.next))
-    }
+    wEn := clearThis || (!clearing && en && (d.hit || d.fill))
+    wSet := Mux(clearThis, clearSet(addrBits - 1, 0), setOf(line))
+    wData := Mux(clearThis, emptyEntry, d.next)
   }
 }
