@@ -247,8 +247,10 @@ final case class PlatformParams(
   /** the memory controllers, each with an access order of its own (simulation logs one per MC): one per IU
     * cluster, then one per node bank */
   val memControllers: Int = ius + nodeBanks
-  /** Entries of the TC's dispatch queue with PIPELINE (it registers the TUs' ready before the ray queue's read). */
-  val tcDispatchEntries: Int = 2
+  /** Entries of a register slice (arb.Slice) that PIPELINE puts on a handshake between units: the TC's dispatch,
+    * the IU's memory requests, each MC path's DRAM reads. Two, so that a slice passes an item every cycle.
+    */
+  val sliceEntries: Int = 2
   /** PIPELINE's budget: LUT levels at most between two registers of a datapath (None: the fixed stages). */
   lazy val stageBudget: Option[Int] = pipelining.budget(family, pipelineMhz.getOrElse(clockMhz))
   /** The board family's DSP block (boards/timing.json): with a budget, multipliers are cut into its products. */

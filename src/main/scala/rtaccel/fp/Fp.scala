@@ -137,6 +137,9 @@ object Fp {
     val n = n0 max (m + 3)
     val w = x.v.ew max (log2Ceil(n + 2) + 2)
     val maxLs = maxLeftShift min (n - 1)
+    // the rounding reads the top m+2 bits and an OR of the rest: the shifts deliver those j bits (the OR as the
+    // lowest), never the whole significand (docs/fp.md)
+    val j = m + 3
     val lzLevels = Depth.lzc(if (maxLs >= n - 1) n else maxLs + 1)
     // 1: leading zeros, the room left above exponent 1, and the right shift into the subnormal range
     val mid = pipe.step(x, lzLevels + Depth.carry(w) + 1) { r =>
@@ -151,31 +154,35 @@ object Fp {
       val sl = Mux(lz < roomSat, lz, roomSat)
       // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
       val rAmt = 1.S - ex
-      val rSat = Mux(rAmt > (n + 1).S, (n + 1).U, rAmt.asUInt(log2Ceil(n + 2) - 1, 0))
+      val rSat = Mux(rAmt > (j + 1).S, (j + 1).U, rAmt.asUInt(log2Ceil(j + 2) - 1, 0))
       val o = Wire(new NormMid(n, w, sl.getWidth, rSat.getWidth))
       o.sign := r.sign; o.exp := ex; o.sig := sig; o.sl := sl; o.rSat := rSat; o.leftCase := leftCase
       o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
       o
     }
-    // 2: the shifts
+    // 2: the shifts, to the j bits the rounding reads: the top m+2 bits and one bit for the OR of the rest
     val norm = pipe.step(mid, Depth.shift(n) + (if (canUnderflow) 1 else 0)) { r =>
+      // left: the bits that stay below the window, by mask (bit i lands at i + sl), so the shifter has m+2 outputs
       val shl = shlTrunc(r.sig, r.sl)
-      val o = Wire(new RoundIn(n, w))
+      val leftSig = if (n > j) Cat(shl(n - 1, n - j + 1), (0 to n - j).map(i => r.sig(i) && r.sl < (n - j + 1 - i).U).reduce(_ || _)) else shl
+      val o = Wire(new RoundIn(j, w))
       if (canUnderflow) {
-        val wideR = Cat(r.sig, 0.U((n + 1).W)) >> r.rSat
-        o.sig := Mux(r.leftCase, shl, wideR(2 * n, n + 1))
-        o.sticky := r.sticky || (!r.leftCase && wideR(n, 0).orR)
-      } else { o.sig := shl; o.sticky := r.sticky }
+        // right: shifted by j + 1 or more, everything lands below the window: the saturation above
+        val t = if (n > j) Cat(r.sig(n - 1, n - j + 1), r.sig(n - j, 0).orR) else r.sig
+        val wideR = Cat(t, 0.U((j + 1).W)) >> r.rSat
+        o.sig := Mux(r.leftCase, leftSig, wideR(2 * j, j + 1))
+        o.sticky := r.sticky || (!r.leftCase && wideR(j, 0).orR)
+      } else { o.sig := leftSig; o.sticky := r.sticky }
       o.exp := Mux(r.leftCase, r.exp - r.sl.zext, 1.S) // >= 1; with sig's MSB clear only when it is 1 (subnormal)
       o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp
       o
     }
     // 3: round: the rounding decision and the increment
-    val rnd = pipe.step(norm, Depth.reduce(n - m) + 2 + Depth.carry(m + 2)) { r =>
+    val rnd = pipe.step(norm, Depth.reduce(j - m) + 2 + Depth.carry(m + 2)) { r =>
       val s = r.sig
-      val kept = s(n - 1, n - 1 - m) // m+1 bits, hidden bit on top
-      val guard = s(n - 2 - m)
-      val low = if (n - 3 - m >= 0) s(n - 3 - m, 0).orR else false.B
+      val kept = s(j - 1, j - 1 - m) // m+1 bits, hidden bit on top
+      val guard = s(j - 2 - m)
+      val low = s(0) // j = m + 3: the OR of everything below the guard bit
       val sticky = r.sticky || low
       // nearest even, or (directed) away from zero exactly when the direction points away from zero
       val up = if (directed) (r.toPos =/= r.sign) && (guard || sticky) else guard && (sticky || kept(0))
@@ -288,7 +295,9 @@ object Fp {
       val dSat = Mux(d > dMax.U, dMax.U, d)
       val yWide = Cat(r.ySig, 0.U((g + dMax).W)) >> dSat
       val yAligned = yWide(m + g + dMax, dMax)
-      val yLost = yWide(dMax - 1, 0).orR
+      // the bits shifted below the sticky position, by mask: bit i of ySig is lost when i + g < dSat (one LUT per
+      // bit beside the shifter, whose low half then goes unused)
+      val yLost = (0 to m).map(i => r.ySig(i) && dSat > (i + g).U).reduce(_ || _)
       val o = Wire(new AddAligned(f))
       o.xSign := r.xSign; o.xExp := r.xExp; o.effSub := r.effSub; o.toPos := r.toPos; o.sp := r.sp; o.zeroSign := r.zeroSign
       o.yExt := Cat(0.U(1.W), yAligned | yLost)

@@ -70,12 +70,15 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     if (p.respByPath) chisel3.experimental.doNotDedup(q)
     q
   }
+  // the requests leave through a register slice with PIPELINE (arb.Slice): the MC's ready then ends here
+  val memReq = Wire(Decoupled(new FetchReq(p.respTagBits)))
+  io.mem.req <> rtaccel.arb.Slice(p, memReq)
   val r = arb.io.out.bits
   val reqIsLeaf = r.cref(primFlagBit)
   val jobReady = if (p.respTagged) true.B else if (p.respByPath) Mux(reqIsLeaf, jobQs(1).io.enq.ready, jobQs(0).io.enq.ready) else jobQs(0).io.enq.ready
-  io.mem.req.valid := arb.io.out.valid && jobReady
-  io.mem.req.bits.childRef := r.cref
-  for (t <- io.mem.req.bits.tag) t := arb.io.chosen.get
+  memReq.valid := arb.io.out.valid && jobReady
+  memReq.bits.childRef := r.cref
+  for (t <- memReq.bits.tag) t := arb.io.chosen.get
   val newJob = Wire(new Job)
   newJob.tu := r.tu
   newJob.isLeaf := reqIsLeaf
@@ -84,22 +87,22 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   for ((j, q) <- newJob.ray.zip(r.ray)) j := q
   for ((q, i) <- jobQs.zipWithIndex) {
     val mine = if (p.respByPath) reqIsLeaf === (i == 1).B else true.B
-    q.io.enq.valid := arb.io.out.valid && io.mem.req.ready && mine
+    q.io.enq.valid := arb.io.out.valid && memReq.ready && mine
     q.io.enq.bits := newJob
   }
-  arb.io.out.ready := io.mem.req.ready && jobReady
+  arb.io.out.ready := memReq.ready && jobReady
   // RESP_ORDER=tagged: a requester's job waits in its entry of its kind's table (nodes, leaves: each stores only
   // the fields its collection reads) until its answer; each collection sees a job stream whose head is the job its
   // beat's tag names, valid while a job of its kind is outstanding (at least 2 entries: a 1-bit tag addresses them)
   val jobTables = if (p.respTagged) Seq(false, true).map { leaf =>
     val t = Mem(math.max(2, requesters), new Job).suggestName(if (leaf) "jobs_leaf" else "jobs_node")
-    when(io.mem.req.fire && reqIsLeaf === leaf.B) { t.write(arb.io.chosen.get, newJob) }
+    when(memReq.fire && reqIsLeaf === leaf.B) { t.write(arb.io.chosen.get, newJob) }
     t
   } else Nil
   def tableJobs(beats: DecoupledIO[FetchBeat], leaf: Boolean): DecoupledIO[Job] = {
     val jobs = Wire(Decoupled(new Job))
     val outstanding = RegInit(0.U(log2Ceil(requesters + 1).W))
-    outstanding := outstanding + (io.mem.req.fire && reqIsLeaf === leaf.B).asUInt - jobs.fire.asUInt
+    outstanding := outstanding + (memReq.fire && reqIsLeaf === leaf.B).asUInt - jobs.fire.asUInt
     jobs.valid := outstanding =/= 0.U
     jobs.bits := jobTables(if (leaf) 1 else 0)(beats.bits.tag.get)
     jobs
@@ -114,6 +117,10 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     val isLeaf = only.fold(job.isLeaf)(_.B)
     val buf = Reg(Vec(math.max(nodeWords, primWords), UInt(32.W)))
     val beatIdx = RegInit(0.U(8.W))
+    // the same count one-hot: a word's select is one bit of it (no compare between the register and the words,
+    // which go on into the box pipe's first stage in the same cycle)
+    val unitBeatsMax = buf.length / beatWords
+    val beatHot = RegInit(1.U(unitBeatsMax.W))
     // a unit (node or primitive) is bad if any of its beats came with a memory error
     val errAcc = RegInit(false.B)
     val unitErr = errAcc || beats.bits.err
@@ -128,13 +135,14 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     // the words of the unit as they will be once this beat is stored (the last beat goes straight through)
     val words = Wire(Vec(buf.length, UInt(32.W)))
     for (w <- buf.indices) {
-      val thisBeat = (w / beatWords).U === beatIdx
+      val thisBeat = beatHot(w / beatWords)
       words(w) := Mux(thisBeat, beats.bits.data((w % beatWords) * 32 + 31, (w % beatWords) * 32), buf(w))
     }
     when(beatFire) {
       buf := words
       errAcc := unitErr && !unitDone
       beatIdx := Mux(unitDone, 0.U, beatIdx + 1.U)
+      beatHot := Mux(unitDone, 1.U, (beatHot << 1)(unitBeatsMax - 1, 0))
       when(unitDone && isLeaf) { primIdx := Mux(jobDone, 0.U, primIdx + 1.U) }
     }
     jobs.ready := jobDone

@@ -303,28 +303,36 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   val splitter = Module(new BurstSplitter(g))
   // Each path's DRAM-response sink: straight to the path, or a credit-managed buffer in front of it.
   val sinks = for ((path, i) <- paths.zipWithIndex) yield {
+    val req = path.io.memReq
     if (respBufferBeats == 0) {
-      arb.io.in(i) <> path.io.memReq
+      arb.io.in(i) <> req
       path.io.memResp
     } else {
       val buf = Module(new Queue(new FetchBeat(axi.dataBits), respBufferBeats))
       val free = RegInit(respBufferBeats.U(log2Ceil(respBufferBeats + 1).W))
-      val fits = free >= path.io.memReq.bits.beats
-      arb.io.in(i).valid := path.io.memReq.valid && fits
-      arb.io.in(i).bits := path.io.memReq.bits
-      path.io.memReq.ready := arb.io.in(i).ready && fits
-      val taken = Mux(arb.io.in(i).fire, path.io.memReq.bits.beats, 0.U)
+      val fits = free >= req.bits.beats
+      arb.io.in(i).valid := req.valid && fits
+      arb.io.in(i).bits := req.bits
+      req.ready := arb.io.in(i).ready && fits
+      val taken = Mux(arb.io.in(i).fire, req.bits.beats, 0.U)
       free := free - taken + buf.io.deq.fire.asUInt
       path.io.memResp <> buf.io.deq
       buf.io.enq
     }
   }
-  splitter.io.in.valid := arb.io.out.valid && memOrder.io.enq.ready
-  splitter.io.in.bits := arb.io.out.bits
-  arb.io.out.ready := splitter.io.in.ready && memOrder.io.enq.ready
-  memOrder.io.enq.valid := arb.io.out.valid && splitter.io.in.ready
-  memOrder.io.enq.bits.path := arb.io.chosen
-  memOrder.io.enq.bits.beats := arb.io.out.bits.beats
+  // with PIPELINE the arbiter's choice passes a register slice (arb.Slice) before the splitter and the memory-order
+  // FIFO: their readies end there. After the arbiter, so DRAM order stays the order it chose (one slice, not one
+  // per path: two would let a later request overtake an earlier one, which the in-order response mux cannot wait out)
+  val chosen = Wire(Decoupled(new Bundle { val req = g.memReq; val path = UInt(1.W) }))
+  chosen.valid := arb.io.out.valid; chosen.bits.req := arb.io.out.bits; chosen.bits.path := arb.io.chosen
+  arb.io.out.ready := chosen.ready
+  val issue = rtaccel.arb.Slice(p, chosen)
+  splitter.io.in.valid := issue.valid && memOrder.io.enq.ready
+  splitter.io.in.bits := issue.bits.req
+  issue.ready := splitter.io.in.ready && memOrder.io.enq.ready
+  memOrder.io.enq.valid := issue.valid && splitter.io.in.ready
+  memOrder.io.enq.bits.path := issue.bits.path
+  memOrder.io.enq.bits.beats := issue.bits.req.beats
   io.axi.ar <> splitter.io.ar
 
   val rBeat = RegInit(0.U(g.beatsBits.W))

@@ -57,7 +57,7 @@ class TraversalController(p: PlatformParams) extends Module {
   // Dispatch to the first free TU. With PIPELINE, a small queue between the ray queue and the TUs registers
   // the handshake: otherwise the TUs' ready, ORed over all of them, reaches the ray queue's read pointer and its
   // RAM's read address in the same cycle (the TC's routed critical path on ECP5 once the credits were in).
-  private val ready = if (p.stageBudget.isDefined) Queue(prepared.io.deq, p.tcDispatchEntries) else prepared.io.deq
+  private val ready = rtaccel.arb.Slice(p, prepared.io.deq)
   /** Cycles from a ray's acceptance to its offer to a free TU: the dividers, the ray queue and the dispatch queue. */
   val dispatchLatency: Int = lat + 1 + (if (p.stageBudget.isDefined) 1 else 0)
   val free = VecInit(io.tuRay.map(_.ready))
