@@ -122,9 +122,12 @@ object Throughput {
     val cachePathCycles = p.hw.cachePathCycles
     val nodeOverhead = s.nodeCache.fold(0.0)(_ => cachePathCycles) * s.nodeAccesses
     val primOverhead = s.primCache.fold(0.0)(_ => cachePathCycles) * s.leafAccesses
-    // PIPELINE's registers lengthen every node and leaf test (the fit above is of the fixed stages)
+    // PIPELINE's registers lengthen every node and leaf test, and its slices every access (the fit above is of the
+    // fixed stages)
     val (boxExtra, triExtra) = rtaccel.iu.PipeLatencies.extraOverFixed(p)
-    val overhead = nodeOverhead + primOverhead + boxExtra.toDouble * s.nodeAccesses + triExtra.toDouble * s.leafAccesses
+    def slices(cached: Boolean) = p.accessSliceCycles + (if (cached) 0 else p.passSliceCycles)
+    val overhead = nodeOverhead + primOverhead + (boxExtra + slices(s.nodeCache.isDefined)).toDouble * s.nodeAccesses +
+      (triExtra + slices(s.primCache.isDefined)).toDouble * s.leafAccesses
     val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n
     val dram = (s.nodeDramBytes + s.primDramBytes) / bpc / n
     val nodeBeats = s.nodeAccesses * p.nodeAccessBytes / beatBytes / n

@@ -251,6 +251,18 @@ final case class PlatformParams(
     * the IU's memory requests, each MC path's DRAM reads. Two, so that a slice passes an item every cycle.
     */
   val sliceEntries: Int = 2
+  /** Cycles PIPELINE's slices add to every memory access: the IU's request slice and the MC's after its arbiter
+    * (the throughput model adds them; cache.Throughput).
+    */
+  def accessSliceCycles: Int = if (stageBudget.isDefined) 2 else 0
+  /** Whether the cluster MCs give each path a response buffer: caches reorder DRAM traffic between the paths, and
+    * with several clusters or channels the buffers keep one's R beats from waiting on another's (MemoryController).
+    */
+  def mcResponseBuffers: Boolean = nodeCache.entries > 0 || primCache.entries > 0 || ius > 1 || memChannels > 1 || respByPath
+  /** Cycles PIPELINE's slice on a pass-through path adds to its accesses, where the MC has response buffers (a
+    * cache path queues its DRAM reads already).
+    */
+  def passSliceCycles: Int = if (stageBudget.isDefined && mcResponseBuffers) 1 else 0
   /** PIPELINE's budget: LUT levels at most between two registers of a datapath (None: the fixed stages). */
   lazy val stageBudget: Option[Int] = pipelining.budget(family, pipelineMhz.getOrElse(clockMhz))
   /** The board family's DSP block (boards/timing.json): with a budget, multipliers are cut into its products. */

@@ -302,8 +302,13 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   }, maxOutstanding))
   val splitter = Module(new BurstSplitter(g))
   // Each path's DRAM-response sink: straight to the path, or a credit-managed buffer in front of it.
+  // with response buffers (DRAM may answer the paths out of request order) and PIPELINE, a pass-through path's
+  // reads pass a register slice (a cache path's leave its miss queue): the arbiter's ready ends there
   val sinks = for ((path, i) <- paths.zipWithIndex) yield {
-    val req = path.io.memReq
+    val req = path match {
+      case _: FetchPath if respBufferBeats > 0 => rtaccel.arb.Slice(p, path.io.memReq)
+      case _ => path.io.memReq
+    }
     if (respBufferBeats == 0) {
       arb.io.in(i) <> req
       path.io.memResp

@@ -83,7 +83,6 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   })
   val tc = Module(new TraversalController(p))
   val tus = Seq.fill(p.tus)(Module(new TraversalUnit(p)))
-  private val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
   // IUS clusters: TU i belongs to cluster i / tusPerIu, which has its own IU, MC and caches; the MCs share the
   // one memory port (AxiReadMux). A cluster's TUs answer to their index within it.
   // instance names: iu / mc as before at IUS=1 (waveforms and scripts keep their paths), iu_<c> / mc_<c> otherwise
@@ -94,7 +93,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   // NODE_BANKS > 0: the clusters' MCs have no node cache (their node path carries nothing), the banks have it
   private val clusterNodeCache = if (p.nodeShared) rtaccel.config.CacheParams() else p.nodeCache
   val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(clusterNodeCache, p.primCache, p.mppl),
-    respBufferBeats = if (cached || p.ius > 1 || p.memChannels > 1 || p.respByPath) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
+    respBufferBeats = if (p.mcResponseBuffers) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   private val latencies = rtaccel.iu.PipeLatencies(ius.head.boxPipe.latency, ius.head.triLatency, tc.divs.head.latency)
   val regs = Module(new RegFile(RtAccelTop.configWords(p, latencies), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
@@ -179,7 +178,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   perf.io.clear := regs.io.clearCounters
   val tuBusy = tus.map(_.io.busy)
   val anyBusy = tuBusy.reduce(_ || _) || tc.io.out.valid
-  regs.io.events.busy := anyBusy
+  // STATUS.BUSY: with PIPELINE a cycle late (a register between the TUs' OR and the register file's read mux)
+  regs.io.events.busy := (if (p.stageBudget.isDefined) RegNext(anyBusy, false.B) else anyBusy)
   regs.io.events.rayIn := io.rays.fire
   regs.io.events.hitOut := io.hits.fire
   regs.io.events.readError := h.readError
