@@ -188,15 +188,20 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     require(b.getWidth <= perf.incBits, s"a ${b.getWidth}-bit event does not fit the ${perf.incBits}-bit counter increments")
     if (b.getWidth == perf.incBits) b.asUInt else Cat(0.U((perf.incBits - b.getWidth).W), b) // Bool.pad refuses to widen
   }
+  // with PIPELINE the events reach the counters through a register, and a count over the TUs takes one more in
+  // front of its adder tree: each counter runs a cycle or two late, with the same totals (nothing is read before the
+  // batch is done)
+  def late[T <: Data](x: T): T = if (p.stageBudget.isDefined) RegNext(x, 0.U.asTypeOf(x)) else x
+  def countOf(bits: Seq[Bool]): UInt = ev(PopCount(late(VecInit(bits))))
   val events = Map(
     "cycles" -> 1.U, "batch_cycles" -> ev(regs.io.running), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
-    "stall_iu_arbitration" -> ev(PopCount(tus.map(t => t.io.req.valid && !t.io.req.ready))),
+    "stall_iu_arbitration" -> countOf(tus.map(t => t.io.req.valid && !t.io.req.ready)),
     "stall_memory_request" -> ev(PopCount(memPorts.map(m => m.ar.valid && !m.ar.ready))),
     // an IU waits for data when one of its collections has a job and no beat (RESP_ORDER=path: either stream)
     "stall_memory_data" -> ev(PopCount(ius.map(iu => (iu.io.mem.resp +: iu.io.mem.primResp.toSeq).map(r => r.ready && !r.valid).reduce(_ || _)))),
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
-    "tu_busy_cycles" -> ev(PopCount(tuBusy)))
-  for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := events(n)
+    "tu_busy_cycles" -> countOf(tuBusy))
+  for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := late(events(n))
   val mcc = rtaccel.mc.McCounters.sum(mcs.map(_.io.counters) ++ nodeBanks.toSeq.flatMap(_.io.counters)) // in memoryNames order
   regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
     mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,
