@@ -114,6 +114,8 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
       val lastReady = Array.fill(p.tus)(false); val lastValid = Array.fill(p.tus)(false)
       for (i <- 0 until p.tus) { dut.io.tuRay(i).ready.poke(false.B); dut.io.tuResult(i).valid.poke(false.B) }
       var lastOffer = false; var lastOutReady = false; var poked = -1
+      // the TUs free as the TC sees them: this cycle's, or (PIPELINE: readyLag 1) last cycle's less the one sent a ray
+      var prevFree = Seq.empty[Int]; var prevFired = Seq.empty[Int]
       while (out.size < n) {
         assert(cycle < 200L * n + 1000, s"seed $seed: only ${out.size} of $n results after $cycle cycles")
         val what = s"seed $seed cycle $cycle"
@@ -141,13 +143,17 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
           if (v != lastValid(i)) { dut.io.tuResult(i).valid.poke(v.B); lastValid(i) = v }
         }
         // dispatch: at most one, to the lowest-numbered free TU, the oldest accepted ray
-        val fires = freeIdx.filter(i => dut.io.tuRay(i).valid.peek().litToBoolean).toSeq
+        val offered = (0 until p.tus).filter(i => dut.io.tuRay(i).valid.peek().litToBoolean)
+        assert(offered.forall(freeIdx.contains), s"$what: a ray offered to TU ${offered.mkString(",")}, free are ${freeIdx.mkString(",")}")
+        val fires = offered
         assert(fires.length <= 1, s"$what: rays handed to TUs ${fires.mkString(",")} at once")
+        val seen = if (dut.readyLag == 0) freeIdx.toSeq else prevFree.filterNot(prevFired.contains)
+        prevFree = freeIdx.toSeq; prevFired = fires
         val readyAt = accepted.headOption.map(_._2 + dut.dispatchLatency)
-        if (freeIdx.nonEmpty && readyAt.exists(_ <= cycle))
-          assert(fires.nonEmpty, s"$what: a prepared ray waits while TUs ${freeIdx.mkString(",")} are free")
+        if (seen.nonEmpty && readyAt.exists(_ <= cycle))
+          assert(fires.nonEmpty, s"$what: a prepared ray waits while TUs ${seen.mkString(",")} are free")
         for (i <- fires) {
-          assert(i == freeIdx.min, s"$what: ray to TU $i, but TU ${freeIdx.min} is free")
+          assert(i == seen.min, s"$what: ray to TU $i, but TU ${seen.min} is free")
           assert(accepted.nonEmpty, s"$what: TU $i got a ray that never came in")
           val (r, _) = accepted.dequeue()
           checkPrepared(dut, i, r, s"$what TU $i")
