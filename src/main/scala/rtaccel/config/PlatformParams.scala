@@ -251,10 +251,10 @@ final case class PlatformParams(
     * the IU's memory requests, each MC path's DRAM reads. Two, so that a slice passes an item every cycle.
     */
   val sliceEntries: Int = 2
-  /** Cycles PIPELINE's slices add to every memory access: the IU's request slice and the MC's after its arbiter
-    * (the throughput model adds them; cache.Throughput).
+  /** Cycles PIPELINE's slices add to every memory access: the IU's request slice, the MC's after its arbiter and
+    * the IU's response slice (the throughput model adds them; cache.Throughput).
     */
-  def accessSliceCycles: Int = if (stageBudget.isDefined) 2 else 0
+  def accessSliceCycles: Int = if (stageBudget.isDefined) 3 else 0
   /** Whether the cluster MCs give each path a response buffer: caches reorder DRAM traffic between the paths, and
     * with several clusters or channels the buffers keep one's R beats from waiting on another's (MemoryController).
     */

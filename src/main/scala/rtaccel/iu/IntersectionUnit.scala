@@ -182,11 +182,15 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     (box, tri)
   }
 
+  // the MC's answers arrive through register slices with PIPELINE: the MC's response mux and the words' assembly
+  // into the box pipe's first stage are then in different cycles
+  private val resp = rtaccel.arb.Slice(p, io.mem.resp)
+  private val primResp = io.mem.primResp.map(rtaccel.arb.Slice(p, _))
   val (boxIn, triJob) =
-    if (!p.respByPath) collect(jobQs(0).io.deq, io.mem.resp, None)
-    else if (p.respTagged) (collect(tableJobs(io.mem.resp, leaf = false), io.mem.resp, Some(false))._1,
-      collect(tableJobs(io.mem.primResp.get, leaf = true), io.mem.primResp.get, Some(true))._2)
-    else (collect(jobQs(0).io.deq, io.mem.resp, Some(false))._1, collect(jobQs(1).io.deq, io.mem.primResp.get, Some(true))._2)
+    if (!p.respByPath) collect(jobQs(0).io.deq, resp, None)
+    else if (p.respTagged) (collect(tableJobs(resp, leaf = false), resp, Some(false))._1,
+      collect(tableJobs(primResp.get, leaf = true), primResp.get, Some(true))._2)
+    else (collect(jobQs(0).io.deq, resp, Some(false))._1, collect(jobQs(1).io.deq, primResp.get, Some(true))._2)
 
   val boxPipe = Module(new BoxPipe(p))
   boxPipe.io.in := boxIn
