@@ -252,7 +252,7 @@ final case class PlatformParams(
     */
   val sliceEntries: Int = 2
   /** Cycles PIPELINE's slices add to every memory access: the IU's request slice, the MC's after its arbiter and
-    * the IU's response slice (the throughput model adds them; cache.Throughput).
+    * the IU's register in front of its pipes (the throughput model adds them; cache.Throughput).
     */
   def accessSliceCycles: Int = if (stageBudget.isDefined) 3 else 0
   /** Whether the cluster MCs give each path a response buffer: caches reorder DRAM traffic between the paths, and

@@ -178,12 +178,14 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   perf.io.clear := regs.io.clearCounters
   val tuBusy = tus.map(_.io.busy)
   val anyBusy = tuBusy.reduce(_ || _) || tc.io.out.valid
-  // STATUS.BUSY: with PIPELINE a cycle late (a register between the TUs' OR and the register file's read mux)
-  regs.io.events.busy := (if (p.stageBudget.isDefined) RegNext(anyBusy, false.B) else anyBusy)
+  // With PIPELINE, STATUS.BUSY (the TUs' OR) and the hit events reach the register file through a register: BUSY
+  // falls, and DONE and the interrupt rise, a cycle late. The ray event does not: it bounds the rays accepted.
+  def late(b: Bool): Bool = if (p.stageBudget.isDefined) RegNext(b, false.B) else b
+  regs.io.events.busy := late(anyBusy)
   regs.io.events.rayIn := io.rays.fire
-  regs.io.events.hitOut := io.hits.fire
-  regs.io.events.readError := h.readError
-  regs.io.events.overflow := h.overflow
+  regs.io.events.hitOut := late(io.hits.fire)
+  regs.io.events.readError := late(h.readError)
+  regs.io.events.overflow := late(h.overflow)
   def ev(b: UInt): UInt = { // PopCount of the TUs fits: incBits covers p.tus, so nothing is ever truncated
     require(b.getWidth <= perf.incBits, s"a ${b.getWidth}-bit event does not fit the ${perf.incBits}-bit counter increments")
     if (b.getWidth == perf.incBits) b.asUInt else Cat(0.U((perf.incBits - b.getWidth).W), b) // Bool.pad refuses to widen
@@ -191,8 +193,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   // with PIPELINE the events reach the counters through a register, and a count over the TUs takes one more in
   // front of its adder tree: each counter runs a cycle or two late, with the same totals (nothing is read before the
   // batch is done)
-  def late[T <: Data](x: T): T = if (p.stageBudget.isDefined) RegNext(x, 0.U.asTypeOf(x)) else x
-  def countOf(bits: Seq[Bool]): UInt = ev(PopCount(late(VecInit(bits))))
+  def lateAll[T <: Data](x: T): T = if (p.stageBudget.isDefined) RegNext(x, 0.U.asTypeOf(x)) else x
+  def countOf(bits: Seq[Bool]): UInt = ev(PopCount(lateAll(VecInit(bits))))
   val events = Map(
     "cycles" -> 1.U, "batch_cycles" -> ev(regs.io.running), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
     "stall_iu_arbitration" -> countOf(tus.map(t => t.io.req.valid && !t.io.req.ready)),
@@ -201,7 +203,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     "stall_memory_data" -> ev(PopCount(ius.map(iu => (iu.io.mem.resp +: iu.io.mem.primResp.toSeq).map(r => r.ready && !r.valid).reduce(_ || _)))),
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
     "tu_busy_cycles" -> countOf(tuBusy))
-  for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := late(events(n))
+  for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := lateAll(events(n))
   val mcc = rtaccel.mc.McCounters.sum(mcs.map(_.io.counters) ++ nodeBanks.toSeq.flatMap(_.io.counters)) // in memoryNames order
   regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
     mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,

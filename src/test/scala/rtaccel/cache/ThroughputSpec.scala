@@ -31,8 +31,8 @@ class ThroughputSpec extends AnyFunSuite {
     assert(u.beatCycles == (2 * 128 + 192) / 32.0)
     assert(math.abs(u.raysPerCycle - 1 / 232.0) < 1e-15)
     // PIPELINE=auto: every node test takes the box pipe's extra cycles, every leaf the triangle pipe's (2 + 1 per ray),
-    // and each of the 3 accesses the three slices' cycles (the IU's request and response slices, the MC's after its
-    // arbiter); paper2017
+    // and each of the 3 accesses the three slices' cycles (the IU's request slice and its register in front of
+    // the pipes, the MC's after its arbiter); paper2017
     // has a node cache, so its MC has response buffers and a pass-through path a slice of its own: here no access is
     // cached, one cycle more each
     val (bx, tx) = rtaccel.iu.PipeLatencies.extraOverFixed(Presets.paper2017)
