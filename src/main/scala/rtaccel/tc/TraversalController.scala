@@ -60,22 +60,24 @@ class TraversalController(p: PlatformParams) extends Module {
   private val ready = rtaccel.arb.Slice(p, prepared.io.deq)
   /** Cycles from a ray's acceptance to its offer to a free TU: the dividers, the ray queue and the dispatch queue. */
   val dispatchLatency: Int = lat + 1 + (if (p.stageBudget.isDefined) 1 else 0)
-  // With PIPELINE the TUs' ready is seen a cycle late, through a register, less the TU just sent a ray: a TU leaves
-  // idle only by taking a ray, so one seen free is still free (asserted below). Otherwise the 32 TUs' ready ran
-  // through the lowest-free choice into each TU's ray valid and its accept in the same cycle.
+  // With PIPELINE the TUs' ready is seen a cycle late, less the TU just offered a ray: a TU leaves idle only by
+  // taking a ray, so one seen free is still free (asserted below). The choice of the lowest such TU is made from
+  // this cycle's values and registered (choosing from registered values is the same), so neither the TUs' ready
+  // nor the 32-way choice runs into a TU's ray valid and its accept in the same cycle.
   /** Cycles late the TC sees a TU become free (0 or 1). */
   val readyLag: Int = if (p.stageBudget.isDefined) 1 else 0
-  val free = if (readyLag == 0) VecInit(io.tuRay.map(_.ready)) else {
-    val none = VecInit(Seq.fill(p.tus)(false.B))
-    val was = RegNext(VecInit(io.tuRay.map(_.ready)), none)
-    val sent = RegNext(VecInit(io.tuRay.map(_.valid)), none)
-    VecInit(was.zip(sent).map { case (w, s) => w && !s })
-  }
+  private val offered = Wire(Vec(p.tus, Bool()))
   // one-hot, none when no TU is free: a TU is offered a ray only while it is free
-  val target = PriorityEncoderOH(free)
-  ready.ready := free.asUInt.orR
+  val target: Seq[Bool] =
+    if (readyLag == 0) PriorityEncoderOH(io.tuRay.map(_.ready))
+    else {
+      val freeNext = io.tuRay.zip(offered).map { case (t, o) => t.ready && !o }
+      RegNext(VecInit(PriorityEncoderOH(freeNext)), VecInit(Seq.fill(p.tus)(false.B)))
+    }
+  ready.ready := target.reduce(_ || _)
   for ((t, i) <- io.tuRay.zipWithIndex) {
     t.valid := ready.valid && target(i)
+    offered(i) := t.valid
     t.bits := ready.bits
     when(t.valid) { assert(t.ready, "TraversalController: a ray offered to a TU that is not free") }
   }
