@@ -60,19 +60,23 @@ class TraversalController(p: PlatformParams) extends Module {
   private val ready = rtaccel.arb.Slice(p, prepared.io.deq)
   /** Cycles from a ray's acceptance to its offer to a free TU: the dividers, the ray queue and the dispatch queue. */
   val dispatchLatency: Int = lat + 1 + (if (p.stageBudget.isDefined) 1 else 0)
-  // With PIPELINE the TUs' ready is seen a cycle late, less the TU just offered a ray: a TU leaves idle only by
-  // taking a ray, so one seen free is still free (asserted below). The choice of the lowest such TU is made from
-  // this cycle's values and registered (choosing from registered values is the same), so neither the TUs' ready
-  // nor the 32-way choice runs into a TU's ray valid and its accept in the same cycle.
-  /** Cycles late the TC sees a TU become free (0 or 1). */
-  val readyLag: Int = if (p.stageBudget.isDefined) 1 else 0
+  // With PIPELINE the TUs' ready is seen two cycles late, less the TUs offered a ray since: a TU leaves idle only
+  // by taking a ray, so one seen free is still free (asserted below). The TUs' ready is registered, and the choice
+  // of the lowest such TU is made from registers and registered (choosing from registered values is the same), so
+  // neither a TU's ready nor the 32-way choice runs into another unit's logic in the same cycle.
+  /** Cycles late the TC sees a TU become free (0 or 2). */
+  val readyLag: Int = if (p.stageBudget.isDefined) 2 else 0
   private val offered = Wire(Vec(p.tus, Bool()))
   // one-hot, none when no TU is free: a TU is offered a ray only while it is free
   val target: Seq[Bool] =
     if (readyLag == 0) PriorityEncoderOH(io.tuRay.map(_.ready))
     else {
-      val freeNext = io.tuRay.zip(offered).map { case (t, o) => t.ready && !o }
-      RegNext(VecInit(PriorityEncoderOH(freeNext)), VecInit(Seq.fill(p.tus)(false.B)))
+      val none = VecInit(Seq.fill(p.tus)(false.B))
+      val wasReady = RegNext(VecInit(io.tuRay.map(_.ready)), none)
+      val wasOffered = RegNext(offered, none)
+      // free in the next cycle as seen: ready two cycles before it, offered no ray in either cycle since
+      val freeNext = (0 until p.tus).map(i => wasReady(i) && !wasOffered(i) && !offered(i))
+      RegNext(VecInit(PriorityEncoderOH(freeNext)), none)
     }
   ready.ready := target.reduce(_ || _)
   for ((t, i) <- io.tuRay.zipWithIndex) {

@@ -114,8 +114,10 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
       val lastReady = Array.fill(p.tus)(false); val lastValid = Array.fill(p.tus)(false)
       for (i <- 0 until p.tus) { dut.io.tuRay(i).ready.poke(false.B); dut.io.tuResult(i).valid.poke(false.B) }
       var lastOffer = false; var lastOutReady = false; var poked = -1
-      // the TUs free as the TC sees them: this cycle's, or (PIPELINE: readyLag 1) last cycle's less the one sent a ray
-      var prevFree = Seq.empty[Int]; var prevFired = Seq.empty[Int]
+      // the TUs free as the TC sees them: this cycle's, or (PIPELINE) those free readyLag cycles ago and sent no ray
+      // since (the last readyLag cycles' free TUs and rays sent, newest last)
+      val lag = dut.readyLag
+      val pastFree = mutable.Queue.fill(lag)(Seq.empty[Int]); val pastFired = mutable.Queue.fill(lag)(Seq.empty[Int])
       while (out.size < n) {
         assert(cycle < 200L * n + 1000, s"seed $seed: only ${out.size} of $n results after $cycle cycles")
         val what = s"seed $seed cycle $cycle"
@@ -147,8 +149,8 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
         assert(offered.forall(freeIdx.contains), s"$what: a ray offered to TU ${offered.mkString(",")}, free are ${freeIdx.mkString(",")}")
         val fires = offered
         assert(fires.length <= 1, s"$what: rays handed to TUs ${fires.mkString(",")} at once")
-        val seen = if (dut.readyLag == 0) freeIdx.toSeq else prevFree.filterNot(prevFired.contains)
-        prevFree = freeIdx.toSeq; prevFired = fires
+        val seen = if (lag == 0) freeIdx.toSeq else pastFree.head.filterNot(i => pastFired.exists(_.contains(i)))
+        if (lag > 0) { pastFree.dequeue(); pastFree.enqueue(freeIdx.toSeq); pastFired.dequeue(); pastFired.enqueue(fires) }
         val readyAt = accepted.headOption.map(_._2 + dut.dispatchLatency)
         if (seen.nonEmpty && readyAt.exists(_ <= cycle))
           assert(fires.nonEmpty, s"$what: a prepared ray waits while TUs ${seen.mkString(",")} are free")
