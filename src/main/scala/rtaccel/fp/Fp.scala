@@ -49,6 +49,28 @@ object Fp {
     }
   }
 
+  /** The top k bits of x << amt truncated to x's width, as a logarithmic shifter that carries at each step only the
+    * bits that can still rise into those k (so no stage computes a bit nothing reads). The largest step goes first:
+    * what remains after each is every shift below 2^i, so the bits still needed are a contiguous top k + 2^i - 1.
+    */
+  private[fp] def shlTop(x: UInt, amt: UInt, k: Int): UInt = {
+    val n = x.getWidth
+    require(k >= 1 && k <= n)
+    // v: the top bits of the value so far
+    (amt.getWidth - 1 to 0 by -1).foldLeft(x) { (v, i) =>
+      val s = 1 << i
+      val need = math.min(n, k + s - 1)
+      val vw = v.getWidth
+      val keep = v(vw - 1, vw - need)
+      // v's bits below its top s, then the zeros a truncating shift brings in (only when v is all of x)
+      val shifted = if (s >= vw) 0.U(need.W) else {
+        val hi = v(vw - 1 - s, math.max(0, vw - s - need))
+        if (hi.getWidth < need) Cat(hi, 0.U((need - hi.getWidth).W)) else hi
+      }
+      Mux(amt(i), shifted, keep)
+    }
+  }
+
   /** Leading-zero count of x (x != 0; the result for x == 0 is unspecified), as a log-depth tree:
     * x is padded with ones to a power-of-two width, halves are combined as (hi all zero) ? hi.width + lo : hi.
     */
@@ -163,8 +185,8 @@ object Fp {
     // 2: the shifts, to the j bits the rounding reads: the top m+2 bits and one bit for the OR of the rest
     val norm = pipe.step(mid, Depth.shift(n) + (if (canUnderflow) 1 else 0)) { r =>
       // left: the bits that stay below the window, by mask (bit i lands at i + sl), so the shifter has m+2 outputs
-      val shl = shlTrunc(r.sig, r.sl)
-      val leftSig = if (n > j) Cat(shl(n - 1, n - j + 1), (0 to n - j).map(i => r.sig(i) && r.sl < (n - j + 1 - i).U).reduce(_ || _)) else shl
+      lazy val shl = shlTrunc(r.sig, r.sl)
+      val leftSig = if (n > j) Cat(shlTop(r.sig, r.sl, j - 1), (0 to n - j).map(i => r.sig(i) && r.sl < (n - j + 1 - i).U).reduce(_ || _)) else shl
       val o = Wire(new RoundIn(j, w))
       if (canUnderflow) {
         // right: shifted by j + 1 or more, everything lands below the window: the saturation above
@@ -293,8 +315,7 @@ object Fp {
     val al = pipe.step(sw, Depth.carry(f.expBits) + Depth.shift(dMax) + 1) { r =>
       val d = r.xExp - r.yExp
       val dSat = Mux(d > dMax.U, dMax.U, d)
-      val yWide = Cat(r.ySig, 0.U((g + dMax).W)) >> dSat
-      val yAligned = yWide(m + g + dMax, dMax)
+      val yAligned = Cat(r.ySig, 0.U(g.W)) >> dSat
       // the bits shifted below the sticky position, by mask: bit i of ySig is lost when i + g < dSat (one LUT per
       // bit beside the shifter, whose low half then goes unused)
       val yLost = (0 to m).map(i => r.ySig(i) && dSat > (i + g).U).reduce(_ || _)

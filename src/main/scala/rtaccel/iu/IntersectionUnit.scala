@@ -119,7 +119,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     val beatIdx = RegInit(0.U(8.W))
     // the same count one-hot: a word's select is one bit of it (no compare between the register and the words,
     // which go on into the box pipe's first stage in the same cycle)
-    val unitBeatsMax = buf.length / beatWords
+    val unitBeatsMax = only.fold(buf.length)(leaf => if (leaf) primWords else nodeWords) / beatWords
     val beatHot = RegInit(1.U(unitBeatsMax.W))
     // a unit (node or primitive) is bad if any of its beats came with a memory error
     val errAcc = RegInit(false.B)
@@ -135,7 +135,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     // the words of the unit as they will be once this beat is stored (the last beat goes straight through)
     val words = Wire(Vec(buf.length, UInt(32.W)))
     for (w <- buf.indices) {
-      val thisBeat = beatHot(w / beatWords)
+      val thisBeat = if (w / beatWords < unitBeatsMax) beatHot(w / beatWords) else false.B
       words(w) := Mux(thisBeat, beats.bits.data((w % beatWords) * 32 + 31, (w % beatWords) * 32), buf(w))
     }
     when(beatFire) {
