@@ -182,25 +182,17 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     (box, tri)
   }
 
-  private val resp = io.mem.resp
-  private val primResp = io.mem.primResp
   val (boxJob, triJob0) =
-    if (!p.respByPath) collect(jobQs(0).io.deq, resp, None)
-    else if (p.respTagged) (collect(tableJobs(resp, leaf = false), resp, Some(false))._1,
-      collect(tableJobs(primResp.get, leaf = true), primResp.get, Some(true))._2)
-    else (collect(jobQs(0).io.deq, resp, Some(false))._1, collect(jobQs(1).io.deq, primResp.get, Some(true))._2)
+    if (!p.respByPath) collect(jobQs(0).io.deq, io.mem.resp, None)
+    else if (p.respTagged) (collect(tableJobs(io.mem.resp, leaf = false), io.mem.resp, Some(false))._1,
+      collect(tableJobs(io.mem.primResp.get, leaf = true), io.mem.primResp.get, Some(true))._2)
+    else (collect(jobQs(0).io.deq, io.mem.resp, Some(false))._1, collect(jobQs(1).io.deq, io.mem.primResp.get, Some(true))._2)
 
   // with PIPELINE a node's and a primitive's job pass a register into their pipe: the MC's response mux and the
   // words' assembly then end there, and the pipes' first stages start from it (a cycle more per access, which the
   // throughput model adds: PlatformParams.accessSliceCycles)
-  private def late[T <: Data](j: Valid[T]): Valid[T] = if (p.stageBudget.isEmpty) j else {
-    val r = Wire(Valid(chiselTypeOf(j.bits)))
-    r.valid := RegNext(j.valid, false.B)
-    r.bits := RegEnable(j.bits, j.valid)
-    r
-  }
-  val boxIn = late(boxJob)
-  val triJob = late(triJob0)
+  val boxIn = rtaccel.arb.Slice.late(p, boxJob)
+  val triJob = rtaccel.arb.Slice.late(p, triJob0)
   val boxPipe = Module(new BoxPipe(p))
   boxPipe.io.in := boxIn
   // TRI_TEST: both pipes take the same job and give the same result, at their own latencies

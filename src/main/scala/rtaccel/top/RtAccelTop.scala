@@ -180,7 +180,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val anyBusy = tuBusy.reduce(_ || _) || tc.io.out.valid
   // With PIPELINE, STATUS.BUSY (the TUs' OR) and the hit events reach the register file through a register: BUSY
   // falls, and DONE and the interrupt rise, a cycle late. The ray event does not: it bounds the rays accepted.
-  def late(b: Bool): Bool = if (p.stageBudget.isDefined) RegNext(b, false.B) else b
+  def late[T <: Data](x: T): T = rtaccel.arb.Slice.late(p, x)
   regs.io.events.busy := late(anyBusy)
   regs.io.events.rayIn := io.rays.fire
   regs.io.events.hitOut := late(io.hits.fire)
@@ -193,8 +193,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   // with PIPELINE the events reach the counters through a register, and a count over the TUs takes one more in
   // front of its adder tree: each counter runs a cycle or two late, with the same totals (nothing is read before the
   // batch is done)
-  def lateAll[T <: Data](x: T): T = if (p.stageBudget.isDefined) RegNext(x, 0.U.asTypeOf(x)) else x
-  def countOf(bits: Seq[Bool]): UInt = ev(PopCount(lateAll(VecInit(bits))))
+  def countOf(bits: Seq[Bool]): UInt = ev(PopCount(late(VecInit(bits))))
   val events = Map(
     "cycles" -> 1.U, "batch_cycles" -> ev(regs.io.running), "busy_cycles" -> ev(anyBusy), "rays_in" -> ev(io.rays.fire), "hits_out" -> ev(io.hits.fire),
     "stall_iu_arbitration" -> countOf(tus.map(t => t.io.req.valid && !t.io.req.ready)),
@@ -203,7 +202,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     "stall_memory_data" -> ev(PopCount(ius.map(iu => (iu.io.mem.resp +: iu.io.mem.primResp.toSeq).map(r => r.ready && !r.valid).reduce(_ || _)))),
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
     "tu_busy_cycles" -> countOf(tuBusy))
-  for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := lateAll(events(n))
+  for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := late(events(n))
   val mcc = rtaccel.mc.McCounters.sum(mcs.map(_.io.counters) ++ nodeBanks.toSeq.flatMap(_.io.counters)) // in memoryNames order
   regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
     mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,
