@@ -4,13 +4,43 @@ import chisel3._
 import chisel3.util._
 import rtaccel.config.PlatformParams
 
-/** A register slice on a handshake between units, with PIPELINE only: a queue of `p.sliceEntries`, so that
-  * neither the producer's valid and data nor the consumer's ready cross it in the same cycle (each side's logic
-  * ends at the slice's registers). One cycle more per item; an item every cycle still.
+/** A register slice of two entries: an output register and a skid register beside it. Its handshake is that of a
+  * two-entry queue cycle for cycle (an item enqueued leaves a cycle later at the earliest; `enq.ready` while fewer
+  * than two are held), but every output is a register: `deq.valid` and `deq.bits` come straight from the output
+  * register (a queue's read mux and its pointer compare are a LUT level after its registers) and `enq.ready` is the
+  * skid register's empty bit. So neither side's logic runs into the other's, nor into the slice's own.
+  */
+class RegSlice[T <: Data](gen: T) extends Module {
+  val io = IO(new Bundle {
+    val enq = Flipped(Decoupled(gen))
+    val deq = Decoupled(gen)
+  })
+  private val outValid = RegInit(false.B)
+  private val out = Reg(gen)
+  private val skidValid = RegInit(false.B) // only while the output register is held
+  private val skid = Reg(gen)
+  io.enq.ready := !skidValid
+  io.deq.valid := outValid
+  io.deq.bits := out
+  when(io.deq.ready || !outValid) { // the output register takes the oldest item held, else the one arriving
+    outValid := skidValid || io.enq.valid
+    when(skidValid || io.enq.valid) { out := Mux(skidValid, skid, io.enq.bits) }
+    skidValid := false.B
+  }.elsewhen(io.enq.valid && !skidValid) {
+    skidValid := true.B
+    skid := io.enq.bits
+  }
+}
+
+/** Register slices on the handshakes between units, with PIPELINE only (one cycle more per item; an item every
+  * cycle still).
   */
 object Slice {
-  def apply[T <: Data](p: PlatformParams, d: DecoupledIO[T]): DecoupledIO[T] =
-    if (p.stageBudget.isDefined) Queue(d, p.sliceEntries) else d
+  def apply[T <: Data](p: PlatformParams, d: DecoupledIO[T]): DecoupledIO[T] = if (p.stageBudget.isEmpty) d else {
+    val s = Module(new RegSlice(chiselTypeOf(d.bits)))
+    s.io.enq <> d
+    s.io.deq
+  }
 
   /** `x` a cycle late through a register (zero after reset) with PIPELINE, else `x` itself: for signals no
     * handshake holds (events, status bits).

@@ -8,8 +8,11 @@ import chisel3.util._
   * register both valid and ready between levels). `chosen` is the winner's index, carried with it through the tree.
   * With fanIn >= n it is one RRArbiter, as before pipelining was a parameter. Every request offered is passed on
   * exactly once; the order among requesters is round robin within each group, and round robin over the groups.
+  * `heldInputs`: every requester holds its request until it is taken (as a TU does); the groups at the leaves are
+  * then GrantArbiters, whose grant is a register, so that a requester's valid and its ready do not meet in one
+  * cycle (a cycle more per request).
   */
-class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boolean = true) extends Module {
+class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boolean = true, heldInputs: Boolean = false) extends Module {
   require(n >= 1 && fanIn >= 2, s"a tree arbiter needs requesters (got $n) and a fan-in of 2 or more (got $fanIn)")
   val io = IO(new Bundle {
     val in = Flipped(Vec(n, Decoupled(gen)))
@@ -24,12 +27,18 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boo
   }
 
   /** One level: groups of fanIn inputs, each arbitrated and queued, their winners tagged with their full index. */
-  private def level(ins: Seq[DecoupledIO[Tagged]]): Seq[DecoupledIO[Tagged]] = ins.grouped(fanIn).map(g => Queue(arbitrate(g), 2)).toSeq
-  private def arbitrate(g: Seq[DecoupledIO[Tagged]]): DecoupledIO[Tagged] = if (g.length == 1) g.head else {
-    val a = Module(new RRArbiter(new Tagged, g.length))
-    a.io.in.zip(g).foreach { case (x, y) => x <> y }
-    a.io.out
-  }
+  private def level(ins: Seq[DecoupledIO[Tagged]], leaves: Boolean): Seq[DecoupledIO[Tagged]] =
+    ins.grouped(fanIn).map(g => Queue(arbitrate(g, leaves), 2)).toSeq
+  private def arbitrate(g: Seq[DecoupledIO[Tagged]], leaves: Boolean): DecoupledIO[Tagged] =
+    if (leaves && heldInputs) {
+      val a = Module(new GrantArbiter(new Tagged, g.length))
+      a.io.in.zip(g).foreach { case (x, y) => x <> y }
+      a.io.out
+    } else if (g.length == 1) g.head else {
+      val a = Module(new RRArbiter(new Tagged, g.length))
+      a.io.in.zip(g).foreach { case (x, y) => x <> y }
+      a.io.out
+    }
 
   private val leaves = io.in.zipWithIndex.map { case (x, i) =>
     val t = Wire(Decoupled(new Tagged))
@@ -40,13 +49,43 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boo
   val depth: Int = Iterator.iterate(n)(k => (k + fanIn - 1) / fanIn).takeWhile(_ > fanIn).length
   private val top = {
     var l: Seq[DecoupledIO[Tagged]] = leaves
-    for (_ <- 0 until depth) l = level(l)
-    arbitrate(l)
+    for (d <- 0 until depth) l = level(l, d == 0)
+    arbitrate(l, depth == 0)
   }
   io.out.valid := top.valid
   io.out.bits := top.bits.bits
   io.chosen.foreach(_ := top.bits.idx)
   top.ready := io.out.ready
+}
+
+/** Round-robin arbitration of requesters that hold a request until it is taken (`TreeArbiter`'s `heldInputs`): the
+  * grant is chosen a cycle ahead from the requests then offered and held in a register until its request is taken,
+  * so `in(i).ready` is the grant bit and `out.ready`, and `out.valid` the grant's OR. The requester taken in a cycle
+  * is not chosen for the next (whether it offers another then is not known a cycle ahead), so a group of busy
+  * requesters passes one request per cycle, and one busy requester alone one every other cycle (a TU waits for its
+  * answer between requests).
+  */
+class GrantArbiter[T <: Data](gen: T, n: Int) extends Module {
+  val io = IO(new Bundle {
+    val in = Flipped(Vec(n, Decoupled(gen)))
+    val out = Decoupled(gen)
+  })
+  private val none = VecInit(Seq.fill(n)(false.B))
+  private val grant = RegInit(none) // one-hot or none
+  private val last = RegInit(0.U(log2Ceil(n).max(1).W)) // the requester granted last: round robin starts after it
+  io.out.valid := grant.asUInt.orR
+  io.out.bits := Mux1H(grant, io.in.map(_.bits))
+  for (i <- 0 until n) {
+    io.in(i).ready := grant(i) && io.out.ready
+    when(grant(i)) { assert(io.in(i).valid, "GrantArbiter: a granted requester withdrew its request") }
+  }
+  private val cand = io.in.zip(grant).map { case (x, g) => x.valid && !g } // the granted one is taken or kept
+  private val after = (0 until n).map(i => cand(i) && i.U > last)
+  private val pick = Mux(after.reduce(_ || _), VecInit(PriorityEncoderOH(after)), VecInit(PriorityEncoderOH(cand)))
+  when(!io.out.valid || io.out.ready) { // the grant is free next cycle: choose among the others
+    grant := pick
+    when(cand.reduce(_ || _)) { last := OHToUInt(pick) }
+  }
 }
 
 object TreeArbiter {

@@ -247,14 +247,11 @@ final case class PlatformParams(
   /** the memory controllers, each with an access order of its own (simulation logs one per MC): one per IU
     * cluster, then one per node bank */
   val memControllers: Int = ius + nodeBanks
-  /** Entries of a register slice (arb.Slice) that PIPELINE puts on a handshake between units: the TC's dispatch,
-    * the IU's memory requests, each MC path's DRAM reads. Two, so that a slice passes an item every cycle.
+  /** Cycles PIPELINE's registers add to every memory access: the IU arbiter's registered grant, the IU's request
+    * slice, the MC's after its arbiter and the IU's register in front of its pipes (the throughput model adds them;
+    * cache.Throughput).
     */
-  val sliceEntries: Int = 2
-  /** Cycles PIPELINE's slices add to every memory access: the IU's request slice, the MC's after its arbiter and
-    * the IU's register in front of its pipes (the throughput model adds them; cache.Throughput).
-    */
-  def accessSliceCycles: Int = if (stageBudget.isDefined) 3 else 0
+  def accessSliceCycles: Int = if (stageBudget.isDefined) 4 else 0
   /** Whether the cluster MCs give each path a response buffer: caches reorder DRAM traffic between the paths, and
     * with several clusters or channels the buffers keep one's R beats from waiting on another's (MemoryController).
     */

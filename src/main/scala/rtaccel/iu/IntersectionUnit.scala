@@ -40,9 +40,10 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
 
   // ---- arbitration and issue: a request goes to memory and its context to the job FIFO together
   // a tree of small arbiters with queues between its levels (PIPELINE), one RRArbiter without a budget
-  // (the winner's index tags requests with RESP_ORDER=tagged only)
+  // (the winner's index tags requests with RESP_ORDER=tagged only); with PIPELINE the leaves' grants are registers
+  // (a TU holds its request until taken), so a TU's request and its ready are not one path through the arbiter
   val arb = Module(new rtaccel.arb.TreeArbiter(new IuReq(p), requesters, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, requesters),
-    withChosen = p.respTagged))
+    withChosen = p.respTagged, heldInputs = p.stageBudget.isDefined))
   arb.io.in <> io.req
   class Job extends Bundle {
     val tu = UInt(p.tuBits.W)

@@ -7,22 +7,24 @@ import scala.util.Random
 
 /** The tree arbiter under random traffic: every requester holds each request until it is taken (as TUs do); every
   * request comes out exactly once, with `chosen` naming its requester; a requester is never starved; with the output
-  * always ready and every input busy, one request leaves per cycle.
+  * always ready and every input busy, one request leaves per cycle. With `heldInputs` (registered grants at the
+  * leaves) a request is never taken in the cycle it is first offered: its ready does not depend on its valid.
   */
 class TreeArbiterSpec extends AnyFunSuite with ChiselScalatestTester {
-  for ((n, fanIn) <- Seq((32, 4), (5, 2), (7, 8)))
-    test(s"$n requesters, fan-in $fanIn: each request once, chosen = its requester, none starved, full rate") {
-      test(new TreeArbiter(UInt(16.W), n, fanIn)) { dut =>
+  for ((n, fanIn, held) <- Seq((32, 4, false), (5, 2, false), (7, 8, false), (32, 4, true), (5, 2, true), (3, 4, true)))
+    test(s"$n requesters, fan-in $fanIn${if (held) ", registered grants" else ""}: each request once, chosen = its requester, none starved, full rate") {
+      test(new TreeArbiter(UInt(16.W), n, fanIn, heldInputs = held)) { dut =>
         val rnd = new Random(n * 31 + fanIn)
         val next = Array.fill(n)(0) // the sequence number each requester offers next
         val offering = Array.fill(n)(false)
         val got = scala.collection.mutable.Map[(Int, Int), Int]().withDefaultValue(0)
         var lastTaken = Array.fill(n)(0L)
+        val firstOffered = Array.fill(n)(-1L) // the cycle the request now offered was first offered
         val perRequester = 40
         var cycle = 0L
         def word(i: Int) = (i << 8) | next(i)
         while (next.exists(_ < perRequester) || offering.exists(identity)) {
-          for (i <- 0 until n) if (!offering(i) && next(i) < perRequester && rnd.nextInt(3) > 0) offering(i) = true
+          for (i <- 0 until n) if (!offering(i) && next(i) < perRequester && rnd.nextInt(3) > 0) { offering(i) = true; firstOffered(i) = cycle }
           for (i <- 0 until n) { dut.io.in(i).valid.poke(offering(i).B); dut.io.in(i).bits.poke(word(i).U) }
           val ready = rnd.nextInt(5) > 0
           dut.io.out.ready.poke(ready.B)
@@ -32,6 +34,7 @@ class TreeArbiterSpec extends AnyFunSuite with ChiselScalatestTester {
             got((w >> 8, w & 0xff)) += 1
           }
           for (i <- 0 until n) if (offering(i) && dut.io.in(i).ready.peek().litToBoolean) {
+            if (held) assert(firstOffered(i) < cycle, s"cycle $cycle: requester $i taken in the cycle it offered (the grant is not a register)")
             offering(i) = false; next(i) += 1; lastTaken(i) = cycle
           }
           for (i <- 0 until n) if (offering(i)) assert(cycle - lastTaken(i) < 20L * n, s"requester $i starved at cycle $cycle")
