@@ -60,8 +60,8 @@ class TraversalUnit(p: PlatformParams) extends Module {
   val readError = Reg(Bool())
   class Entry extends Bundle { val cref = UInt(TraversalUnit.refBits.W); val t = UInt(TraversalUnit.distBits.W) }
   private val short = p.shortStack > 0
-  val stack = if (short) None else Some(Mem(p.stackDepth, new Entry))
-  val sp = RegInit(0.U(log2Ceil(p.stackDepth + 1).W))
+  // with PIPELINE the full stack's top entry is a register (FullStack): a pop's compare does not follow a RAM read
+  val stack = if (short) None else Some(new FullStack(new Entry, p.stackDepth, topInRegister = p.stageBudget.isDefined))
   val ss = if (short) Some(new ShortStack(p)) else None
   val sorted = Reg(Vec(p.m, new Entry))
   val pushIdx = Reg(UInt(log2Ceil(p.m).W))
@@ -73,7 +73,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   when(io.ray.fire) {
     r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B; readError := false.B
     best.id := io.ray.bits.id; best.t := inf; best.prim := "hffffffff".U; best.u := 0.U; best.v := 0.U
-    sp := 0.U; ss.foreach(_.start())
+    stack.foreach(_.clear()); ss.foreach(_.start())
     state := S.issue
   }
 
@@ -111,8 +111,8 @@ class TraversalUnit(p: PlatformParams) extends Module {
     ss match {
       case Some(s) => s.push(sorted(pushIdx).cref, sorted(pushIdx).t)
       case None =>
-        when(sp === p.stackDepth.U) { overflow := true.B }
-          .otherwise { stack.get(sp) := sorted(pushIdx); sp := sp + 1.U }
+        when(stack.get.full) { overflow := true.B }
+          .otherwise { stack.get.push(sorted(pushIdx)) }
     }
     pushIdx := pushIdx - 1.U
     when(pushIdx === lastPush) { state := S.issue }
@@ -137,10 +137,9 @@ class TraversalUnit(p: PlatformParams) extends Module {
         }.elsewhen(s.anyDropped && s.level =/= 0.U) { s.restart(); cur := 0.U; state := S.issue } // from the root again
           .otherwise { state := S.done } // nothing pending and nothing dropped, or the root itself is finished
       case None =>
-        when(sp === 0.U) { state := S.done }
+        when(stack.get.empty) { state := S.done }
           .otherwise {
-            val top = stack.get(sp - 1.U)
-            sp := sp - 1.U
+            val top = stack.get.pop()
             when(!Fp.gt(f, top.t, tmax)) { cur := top.cref; state := S.issue }
           }
     }
