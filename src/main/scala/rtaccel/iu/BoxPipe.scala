@@ -105,11 +105,27 @@ class BoxPipe(p: PlatformParams) extends Module {
     val near32 = if (bf == f) tnear else Fp.convertT(pipe, bf, f, tnear, Timed(false.B, 0, 0))
     (le, near32)
   }
-  private val (tDone, dDone) = pipe.join(hits.flatMap { case (l, n) => Seq(l, n) }: _*)
   // what the result needs of the job besides the arithmetic, carried down the pipe (not the whole job)
-  private val j = at(job.map(0) { x =>
+  private val meta = job.map(0) { x =>
     val m = Wire(new BoxMeta(p)); m.tu := x.tu; m.err := x.err; m.cref := VecInit((0 until p.m).map(c => x.words(7 * c + 6))); m
-  }, tDone)
+  }
+  // a slot is live when it holds a child and the node came without error
+  private val live = (0 until p.m).map(c => meta.map(1)(x => x.cref(c) =/= 0.U && !x.err))
+  // Each hit child's rank by entry distance (nearer first; an equal one in an earlier slot first), once here for every
+  // TU (the TU pushes its children in this order): a compare of each pair of slots, then a count per slot
+  private val nearer = for (lo <- 0 until p.m; hi <- lo + 1 until p.m) yield (lo, hi) -> Fp.cmpT(pipe, f, hits(lo)._2, hits(hi)._2)(Fp.gt)
+  private val ranks = {
+    val ins: Seq[Timed[UInt]] = hits.map(_._1) ++ live ++ nearer.map(_._2)
+    pipe.op(ins, BoxPipe.rankLevels(p.m)) { v =>
+      def hit(i: Int) = v(i)(0) && v(p.m + i)(0)
+      val gt = nearer.map(_._1).zipWithIndex.map { case (k, n) => k -> v(2 * p.m + n)(0) }.toMap // tnear(lo) > tnear(hi)
+      VecInit((0 until p.m).map { j =>
+        PopCount((0 until p.m).filter(_ != j).map(i => if (i < j) hit(i) && !gt((i, j)) else hit(i) && gt((j, i))))
+      })
+    }
+  }
+  private val (tDone, dDone) = pipe.join(hits.flatMap { case (l, n) => Seq(l, n) } :+ ranks: _*)
+  private val j = at(meta, tDone)
   val res = Wire(new BoxResult(p))
   res.tu := j.tu
   res.err := j.err
@@ -117,6 +133,7 @@ class BoxPipe(p: PlatformParams) extends Module {
     res.tnear(c) := at(hits(c)._2, tDone)
     res.hit(c) := at(hits(c)._1, tDone) && j.cref(c) =/= 0.U && !j.err
     res.cref(c) := j.cref(c)
+    res.rank(c) := at(ranks, tDone)(c)
   }
   private val out = stage(Timed(res, tDone, dDone + 1))
   /** Cycles from a job to its result. */
@@ -130,4 +147,7 @@ class BoxPipe(p: PlatformParams) extends Module {
 object BoxPipe {
   /** LUT levels in front of the pipe's inputs in the IU (the collection's beat selection and node decode). */
   val inputDepth: Int = 2
+  /** LUT levels of the ranking's count per slot, of M - 1 terms of two bits each (an estimate: a level for each
+    * doubling of its inputs past what one LUT6 takes). */
+  def rankLevels(m: Int): Int = math.max(1, log2Ceil(2 * (m - 1)) - 1)
 }

@@ -1,6 +1,7 @@
 package rtaccel.iu
 
 import chisel3._
+import chisel3.util.log2Ceil
 import rtaccel.config.PlatformParams
 
 /** A ray as the intersection unit needs it: origin, direction, reciprocal direction and tmin (fp32 bits). */
@@ -41,6 +42,9 @@ class BoxResult(p: PlatformParams) extends Bundle {
   val tnear = Vec(p.m, UInt(32.W))
   val cref = Vec(p.m, UInt(32.W))
   val err = Bool() // the node came with a memory error: no child is hit
+  /** Each hit child's rank by entry distance: nearer first, an equal one in an earlier slot first (BoxPipe; a non-hit
+    * slot's rank means nothing). */
+  val rank = Vec(p.m, UInt(log2Ceil(p.m).max(1).W))
 }
 
 /** Möller–Trumbore result for one primitive of a leaf; `last` marks the leaf's final primitive. */

@@ -84,15 +84,12 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.req.bits.ray.foreach(_ := r.ray) // RAY_STORE=1: the IU's ray store has it, and r.ray is never read
   when(io.req.fire) { state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox) }
 
-  // Node: stable rank of each hit child = hit children nearer, or equally near in an earlier slot.
+  // Node: the hit children in the order of their ranks (the box pipe's: nearer first, an equal one in an earlier
+  // slot first).
   when(state === S.waitBox && io.box.valid && io.box.bits.tu === index) {
     val b = io.box.bits
     when(b.err) { readError := true.B } // b.hit is all false then: the ray pops on
-    val ranks = (0 until p.m).map { j =>
-      PopCount((0 until p.m).filter(_ != j).map { i =>
-        if (i < j) b.hit(i) && !Fp.gt(f, b.tnear(i), b.tnear(j)) else b.hit(i) && Fp.gt(f, b.tnear(j), b.tnear(i))
-      })
-    }
+    val ranks = b.rank
     for (j <- 0 until p.m) when(b.hit(j)) {
       sorted(ranks(j)).cref := b.cref(j); sorted(ranks(j)).t := b.tnear(j)
     }

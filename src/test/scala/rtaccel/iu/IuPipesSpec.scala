@@ -88,6 +88,12 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
             dut.io.out.bits.hit(c).expect(hit(c).B, s"cycle $cycle child $c")
             if (hit(c)) dut.io.out.bits.tnear(c).expect(tn(c).U, s"cycle $cycle child $c tnear")
           }
+          // each hit child's rank: the hit children nearer than it, or as near in an earlier slot (IEEE compare)
+          val near = tn.map(b => java.lang.Float.intBitsToFloat(b.toInt))
+          for (c <- 0 until p.m if hit(c)) {
+            val rank = (0 until p.m).count(i => i != c && hit(i) && (near(i) < near(c) || (near(i) == near(c) && i < c)))
+            dut.io.out.bits.rank(c).expect(rank.U, s"cycle $cycle child $c rank")
+          }
         }
         dut.clock.step()
       }
