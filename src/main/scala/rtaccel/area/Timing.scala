@@ -5,7 +5,7 @@ import rtaccel.io.InputError
 
 /** The levels -> MHz rule of one family (boards/timing.json): a proxy with no placement, routing or retiming. */
 final case class FamilyTiming(family: String, levelNs: Double, overheadNs: Double, capMhz: Double, source: String,
-                              dsp: rtaccel.fp.DspShape = rtaccel.fp.DspShape.Dsp48) {
+                              dsp: rtaccel.fp.DspShape = rtaccel.fp.DspShape.Dsp48, delayRamCycles: Option[Int] = None) {
   def dspLevels: Int = dsp.levels
   def fmaxMhz(levels: Int): Double = math.min(capMhz, 1000.0 / (overheadNs + levels * levelNs))
   /** The most LUT levels a path may have at `mhz` by this rule (at least 1): what PIPELINE=auto budgets. */
@@ -29,6 +29,11 @@ object Timing {
     val dsp = t.obj.get("dsp_unsigned_bits").collect { case ujson.Arr(v) if v.length == 2 && v.forall(x => x.numOpt.exists(d => d >= 2 && d == d.toInt)) =>
       rtaccel.fp.DspShape(v(0).num.toInt, v(1).num.toInt, dspLevels.toInt)
     }.getOrElse(throw new InputError(s"family '$family' in $path needs dsp_unsigned_bits: [a, b], the widest unsigned operands one DSP block multiplies"))
-    FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""), dsp)
+    // delay_ram_cycles: absent or null where delay chains map to shift-register LUTs
+    val delayRam = t.obj.get("delay_ram_cycles").filterNot(_.isNull).map { v =>
+      v.numOpt.filter(d => d >= 2 && d == d.toInt).map(_.toInt)
+        .getOrElse(throw new InputError(s"family '$family' in $path: delay_ram_cycles must be a whole number >= 2 or null (got $v)"))
+    }
+    FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""), dsp, delayRam)
   }
 }

@@ -265,7 +265,11 @@ final case class PlatformParams(
   /** The board family's DSP block (boards/timing.json): with a budget, multipliers are cut into its products. */
   lazy val dspShape: rtaccel.fp.DspShape = rtaccel.area.Timing.forFamily(family).dsp
   /** A register placer for one module's datapath at this budget (each module takes its own). */
-  def pipe: rtaccel.fp.Stager = new rtaccel.fp.Stager(stageBudget, if (stageBudget.isDefined) dspShape else rtaccel.fp.DspShape.Dsp48)
+  def pipe: rtaccel.fp.Stager =
+    if (stageBudget.isEmpty) new rtaccel.fp.Stager(None) else new rtaccel.fp.Stager(stageBudget, dspShape, delayRamCycles)
+  /** With a budget, on a family without shift-register LUTs (boards/timing.json `delay_ram_cycles`): delays of at
+    * least this many cycles in LUT RAM (fp.Stager.chain). */
+  lazy val delayRamCycles: Option[Int] = rtaccel.area.Timing.forFamily(family).delayRamCycles
   val cyclesPerSecond: Double = clockMhz * 1e6
   /** Sustained DRAM bytes per cycle of ONE channel: MEM_GBPS is per channel, since each of the MEM_CHANNELS is an
     * AXI4 master with a DRAM of its own, and the simulator models each channel alone (sim.DramModel at this rate).

@@ -30,8 +30,11 @@ object DspShape {
   * (no register inside an operator). Every register this places is a plain `RegNext` (the pipelines never stall),
   * so results do not depend on where the registers go: only latencies do. With a budget, multipliers are cut into
   * products of the target's DSP blocks (`dsp`), summed on carry chains with registers between the sums.
+  * `delayRam` (families without shift-register LUTs, boards/timing.json `delay_ram_cycles`): a value delayed by at
+  * least that many cycles goes through a ring in LUT RAM instead of a chain of flip-flops (`chain`).
   */
-final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48) {
+final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, val delayRam: Option[Int] = None) {
+  require(delayRam.forall(_ >= 2), s"a delay in LUT RAM takes at least 2 cycles (got ${delayRam.get})")
   require(budget.forall(_ >= 1), s"a pipeline budget must be at least 1 LUT level (got ${budget.get})")
   private var placed = Stager.Census()
   /** The register bits this Stager has placed so far (a census for the cost model; synthesis may trim unused ones). */
@@ -55,8 +58,16 @@ final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48) 
     require(at >= x.at, s"cannot read a value valid at cycle ${x.at} at cycle $at")
     if (at == x.at) x else {
       val byAt = delayed.computeIfAbsent(x.v, _ => scala.collection.mutable.Map[Int, Data]())
-      Timed(byAt.getOrElseUpdate(at, { count(x.v, at - x.at); ShiftRegister(x.v, at - x.at) }).asInstanceOf[T], at, 0)
+      Timed(byAt.getOrElseUpdate(at, { count(x.v, at - x.at); chain(x.v, at - x.at) }).asInstanceOf[T], at, 0)
     }
+  }
+
+  /** x delayed by n cycles (no reset): flip-flops, or a ring in LUT RAM from `delayRam` cycles on (a value whose
+    * width is not known yet, or a constant, stays in flip-flops).
+    */
+  def chain[T <: Data](x: T, n: Int): T = delayRam match {
+    case Some(min) if n >= min && !x.isLit && x.widthOption.contains(Stager.knownWidth(x)) => Stager.ramDelay(x, n)
+    case _ => ShiftRegister(x, n)
   }
 
   /** The latest of xs' times and the depth there. */
@@ -105,6 +116,18 @@ object Stager {
   def knownWidth(x: Data): Int = x match {
     case a: Aggregate => a.getElements.map(knownWidth).sum
     case e => e.widthOption.getOrElse(0)
+  }
+  /** x delayed by n >= 2 cycles through a ring of n - 1 entries in LUT RAM (read before the write at the same row)
+    * and a register after the read, for families whose flip-flops cost a slice each (ECP5: no shift-register LUTs).
+    */
+  def ramDelay[T <: Data](x: T, n: Int): T = {
+    require(n >= 2, s"a delay in LUT RAM takes at least 2 cycles (got $n)")
+    val ring = Mem(n - 1, chiselTypeOf(x)).suggestName("delay")
+    val row = RegInit(0.U(log2Ceil(n - 1).max(1).W))
+    row := Mux(row === (n - 2).U, 0.U, row + 1.U)
+    val out = RegNext(ring(row)) // written n - 1 cycles ago
+    ring(row) := x
+    out
   }
   /** No register inside an operator: the combinational operators of [[Fp]]. */
   def none: Stager = new Stager(None)

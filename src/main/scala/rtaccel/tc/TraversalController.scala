@@ -40,7 +40,7 @@ class TraversalController(p: PlatformParams) extends Module {
     divs(a).io.in.bits.a := one
     divs(a).io.in.bits.b := io.in.bits.f(3 + a)
   }
-  val rayDelayed = ShiftRegister(io.in.bits, lat)
+  val rayDelayed = p.pipe.chain(io.in.bits, lat) // in LUT RAM where flip-flops are dear (fp.Stager.chain)
   val outValid = divs.map(_.io.out.valid).reduce(_ && _) // the three run in lockstep
   credits := credits - io.in.fire.asUInt + prepared.io.deq.fire.asUInt
   prepared.io.enq.valid := outValid

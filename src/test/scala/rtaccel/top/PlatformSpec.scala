@@ -19,10 +19,11 @@ class PlatformSpec extends AnyFunSuite {
   private val full = rtaccel.Regress.full
   // PIPELINE: every case at the presets' auto (registers for 150 MHz on the paper's Virtex-5) but one grid point
   // at none (the fixed stages); make regress adds a deep budget
-  private val grid: Seq[(Int, Int, Seq[Int], Pipelining)] =
-    if (full) (for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16), Pipelining.Auto)) ++
-      Seq((4, 2, Seq(2), Pipelining.Fixed), (2, 4, Seq(4), Pipelining.Levels(3)))
-    else Seq((1, 4, Seq(1, 16), Pipelining.Auto), (4, 2, Seq(2), Pipelining.Fixed))
+  // (the family the budget is reckoned for: ecp5's circuit differs in its DSP tiles and its delay chains in LUT RAM)
+  private val grid: Seq[(Int, Int, Seq[Int], Pipelining, String)] =
+    if (full) (for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16), Pipelining.Auto, "xc5v")) ++
+      Seq((4, 2, Seq(2), Pipelining.Fixed, "xc5v"), (2, 4, Seq(4), Pipelining.Levels(3), "xc5v"), (2, 4, Seq(4), Pipelining.Auto, "ecp5"))
+    else Seq((1, 4, Seq(1), Pipelining.Auto, "xc5v"), (1, 4, Seq(16), Pipelining.Auto, "ecp5"), (4, 2, Seq(2), Pipelining.Fixed, "xc5v"))
 
   private val scene = TestScenes.soup(31, 400)
   private val rays = {
@@ -43,13 +44,13 @@ class PlatformSpec extends AnyFunSuite {
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
                      packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1,
                      order: String = RespOrder.Request, rayStore: Boolean = false, forward: Boolean = false, banks: Int = 0,
-                     pipeline: Pipelining = Pipelining.Auto) = {
+                     pipeline: Pipelining = Pipelining.Auto, family: String = "xc5v") = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
       shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels,
       respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward, nodeBanks = banks,
-      pipelining = pipeline)
+      pipelining = pipeline, family = family)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels-b$banks", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec"))
@@ -73,10 +74,11 @@ class PlatformSpec extends AnyFunSuite {
     o
   }
 
-  for ((tus, m, mppls, pl) <- grid; mppl <- mppls)
-    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl PIPELINE=${pl.name}") {
-      val j = runOne(tus, m, mppl, rays, scene, pipeline = pl).json
+  for ((tus, m, mppls, pl, fam) <- grid; mppl <- mppls)
+    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl PIPELINE=${pl.name}${if (fam != "xc5v") s" for $fam" else ""}") {
+      val j = runOne(tus, m, mppl, rays, scene, pipeline = pl, family = fam).json
       assert(j("pipeline")("mode").str == pl.name && j("pipeline")("budget_levels").isNull == (pl == Pipelining.Fixed), ujson.write(j("pipeline")))
+      assert(j("pipeline")("family").str == fam, ujson.write(j("pipeline")))
     }
 
   // Caches (docs/caches.md): whole scene bit-exact, counts equal the model on the logged order, and no stale
