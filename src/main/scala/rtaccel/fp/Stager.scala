@@ -66,9 +66,12 @@ final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, 
     * width is not known yet, or a constant, stays in flip-flops).
     */
   def chain[T <: Data](x: T, n: Int): T = delayRam match {
-    case Some(min) if n >= min && !x.isLit && x.widthOption.contains(Stager.knownWidth(x)) => Stager.ramDelay(x, n)
+    case Some(min) if n >= min && !x.isLit && x.widthOption.contains(Stager.knownWidth(x)) => Stager.ramDelay(x, n, rowOf(n))
     case _ => ShiftRegister(x, n)
   }
+  // one row counter per ring length, shared by every ring of that length (each counter is a carry chain on ECP5)
+  private val rows = scala.collection.mutable.Map[Int, UInt]()
+  private def rowOf(n: Int): UInt = rows.getOrElseUpdate(n, Stager.ringRow(n))
 
   /** The latest of xs' times and the depth there. */
   def join(xs: Timed[Data]*): (Int, Int) = {
@@ -120,14 +123,18 @@ object Stager {
   /** x delayed by n >= 2 cycles through a ring of n - 1 entries in LUT RAM (read before the write at the same row)
     * and a register after the read, for families whose flip-flops cost a slice each (ECP5: no shift-register LUTs).
     */
-  def ramDelay[T <: Data](x: T, n: Int): T = {
+  def ramDelay[T <: Data](x: T, n: Int, row: UInt): T = {
     require(n >= 2, s"a delay in LUT RAM takes at least 2 cycles (got $n)")
     val ring = Mem(n - 1, chiselTypeOf(x)).suggestName("delay")
-    val row = RegInit(0.U(log2Ceil(n - 1).max(1).W))
-    row := Mux(row === (n - 2).U, 0.U, row + 1.U)
     val out = RegNext(ring(row)) // written n - 1 cycles ago
     ring(row) := x
     out
+  }
+  /** The row of a ring of n - 1 rows: counts 0 .. n - 2 and wraps, from reset. */
+  def ringRow(n: Int): UInt = {
+    val row = RegInit(0.U(log2Ceil(n - 1).max(1).W))
+    row := Mux(row === (n - 2).U, 0.U, row + 1.U)
+    row
   }
   /** No register inside an operator: the combinational operators of [[Fp]]. */
   def none: Stager = new Stager(None)
