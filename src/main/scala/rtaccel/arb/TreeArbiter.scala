@@ -30,15 +30,14 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boo
   private def level(ins: Seq[DecoupledIO[Tagged]], leaves: Boolean): Seq[DecoupledIO[Tagged]] =
     ins.grouped(fanIn).map(g => Queue(arbitrate(g, leaves), 2)).toSeq
   private def arbitrate(g: Seq[DecoupledIO[Tagged]], leaves: Boolean): DecoupledIO[Tagged] =
-    if (leaves && heldInputs) {
-      val a = Module(new GrantArbiter(new Tagged, g.length))
-      a.io.in.zip(g).foreach { case (x, y) => x <> y }
-      a.io.out
-    } else if (g.length == 1) g.head else {
-      val a = Module(new RRArbiter(new Tagged, g.length))
-      a.io.in.zip(g).foreach { case (x, y) => x <> y }
-      a.io.out
-    }
+    if (leaves && heldInputs) fed(Module(new GrantArbiter(new Tagged, g.length)).io, g)
+    else if (g.length == 1) g.head
+    else fed(Module(new RRArbiter(new Tagged, g.length)).io, g)
+  /** An arbiter's output, its inputs driven by g. */
+  private def fed(a: ArbiterIO[Tagged], g: Seq[DecoupledIO[Tagged]]): DecoupledIO[Tagged] = {
+    a.in.zip(g).foreach { case (x, y) => x <> y }
+    a.out
+  }
 
   private val leaves = io.in.zipWithIndex.map { case (x, i) =>
     val t = Wire(Decoupled(new Tagged))
@@ -66,10 +65,8 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boo
   * answer between requests).
   */
 class GrantArbiter[T <: Data](gen: T, n: Int) extends Module {
-  val io = IO(new Bundle {
-    val in = Flipped(Vec(n, Decoupled(gen)))
-    val out = Decoupled(gen)
-  })
+  val io = IO(new ArbiterIO(gen, n)) // its `chosen` is left at 0: the tree carries the index with the request
+  io.chosen := 0.U
   private val none = VecInit(Seq.fill(n)(false.B))
   private val grant = RegInit(none) // one-hot or none
   private val last = RegInit(0.U(log2Ceil(n).max(1).W)) // the requester granted last: round robin starts after it

@@ -109,8 +109,7 @@ class BoxPipe(p: PlatformParams) extends Module {
   private val meta = job.map(0) { x =>
     val m = Wire(new BoxMeta(p)); m.tu := x.tu; m.err := x.err; m.cref := VecInit((0 until p.m).map(c => x.words(7 * c + 6))); m
   }
-  // a slot is live when it holds a child and the node came without error
-  private val live = (0 until p.m).map(c => meta.map(1)(x => x.cref(c) =/= 0.U && !x.err))
+  private val live = (0 until p.m).map(c => meta.map(1)(BoxPipe.live(_, c)))
   // Each hit child's rank by entry distance (nearer first; an equal one in an earlier slot first), once here for every
   // TU (the TU pushes its children in this order): a compare of each pair of slots, then a count per slot
   private val nearer = for (lo <- 0 until p.m; hi <- lo + 1 until p.m) yield (lo, hi) -> Fp.cmpT(pipe, f, hits(lo)._2, hits(hi)._2)(Fp.gt)
@@ -131,7 +130,7 @@ class BoxPipe(p: PlatformParams) extends Module {
   res.err := j.err
   for (c <- 0 until p.m) {
     res.tnear(c) := at(hits(c)._2, tDone)
-    res.hit(c) := at(hits(c)._1, tDone) && j.cref(c) =/= 0.U && !j.err
+    res.hit(c) := at(hits(c)._1, tDone) && BoxPipe.live(j, c)
     res.cref(c) := j.cref(c)
     res.rank(c) := at(ranks, tDone)(c)
   }
@@ -147,6 +146,8 @@ class BoxPipe(p: PlatformParams) extends Module {
 object BoxPipe {
   /** LUT levels in front of the pipe's inputs in the IU (the collection's beat selection and node decode). */
   val inputDepth: Int = 2
+  /** A slot can be hit: it holds a child and the node came without error. */
+  def live(m: BoxMeta, c: Int): Bool = m.cref(c) =/= 0.U && !m.err
   /** LUT levels of the ranking's count per slot, of M - 1 terms of two bits each (an estimate: a level for each
     * doubling of its inputs past what one LUT6 takes). */
   def rankLevels(m: Int): Int = math.max(1, log2Ceil(2 * (m - 1)) - 1)

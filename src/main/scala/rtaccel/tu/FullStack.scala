@@ -16,14 +16,18 @@ class FullStack[T <: Data](entry: T, depth: Int, topInRegister: Boolean) {
   private val n = RegInit(0.U(log2Ceil(depth + 1).W)) // entries held
   def empty: Bool = n === 0.U
   def full: Bool = n === depth.U
-  def clear(): Unit = { n := 0.U; if (topInRegister) { at := ((1 << addrBits) - 1).U; below := ((1 << addrBits) - 2).U } }
 
   private val addrBits = log2Ceil(depth).max(1)
   // topInRegister: `top` is entry n-1; the RAM holds entries 0..n-2 at their index. `at` = n-1 (where the top goes
-  // when pushed under) and `below` = n-2 (the entry that becomes the top on a pop), both kept as registers
+  // when pushed under) and `below` = n-2 (the entry that becomes the top on a pop), kept as registers so that no
+  // adder sits in front of the RAM (both wrap below zero, where nothing reads them)
   private val top = if (topInRegister) Some(Reg(entry)) else None
-  private val at = RegInit(((1 << addrBits) - 1).U(addrBits.W))
-  private val below = RegInit(((1 << addrBits) - 2).U(addrBits.W))
+  private val emptyAt = ((1 << addrBits) - 1).U(addrBits.W) // n - 1 and n - 2 at n = 0
+  private val emptyBelow = ((1 << addrBits) - 2).U(addrBits.W)
+  private val at = if (topInRegister) RegInit(emptyAt) else emptyAt
+  private val below = if (topInRegister) RegInit(emptyBelow) else emptyBelow
+
+  def clear(): Unit = { n := 0.U; if (topInRegister) { at := emptyAt; below := emptyBelow } }
 
   /** Pushes `e` (call only when !full). */
   def push(e: T): Unit = {
