@@ -131,11 +131,36 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
         CounterBase + 8 * i + 4 -> Mux(snapIdx === i.U, snapHi, io.counters(i)(63, 32)))
     }
   require(table.map(_._1).distinct.length == table.length, "two registers share an address")
+  require(table.forall(_._1 % 4 == 0), "a register off a word boundary")
+  // The word by a tree of 2:1 muxes on the word address's bits, unmapped words 0 (an unaligned address reads 0): as
+  // many muxes as a MuxLookup over the table, but as deep as the address is wide, where a MuxLookup is a chain of
+  // compares as long as the table (RegFile's routed critical path on ECP5). A dynamic Vec index would be a shifter.
   val mapped = table.map(t => rAddr === t._1.U).reduce(_ || _)
   when(io.lite.ar.fire) {
     rValid := true.B
-    rData := MuxLookup(rAddr, 0.U(32.W))(table.map { case (a, v) => a.U -> v })
+    rData := Mux(rAddr(1, 0) === 0.U, RegFile.muxTree(rAddr >> 2, table.map { case (a, v) => (a >> 2) -> v }), 0.U)
     rResp := Mux(mapped, AxiLite.Okay.U, AxiLite.DecErr.U)
-    for (i <- counterNames.indices) when(rAddr === (CounterBase + 8 * i).U) { snapHi := io.counters(i)(63, 32); snapIdx := i.U }
+    // a LO read snapshots its counter's high word (the counter's index from the address, as for the words)
+    val counterLo = rAddr >= CounterBase.U && rAddr < (CounterBase + 8 * counterNames.length).U && rAddr(2, 0) === 0.U
+    val counterIdx = (rAddr - CounterBase.U) >> 3
+    when(counterLo) { snapHi := RegFile.muxTree(counterIdx, io.counters.map(_(63, 32)).zipWithIndex.map(_.swap)); snapIdx := counterIdx }
+  }
+}
+
+object RegFile {
+  /** The value at index `sel` of a sparse table (index -> value, 0 elsewhere): a binary tree of 2:1 muxes on `sel`'s
+    * bits, low bit at the leaves, with the subtrees that hold no entry left out.
+    */
+  def muxTree(sel: UInt, entries: Seq[(Int, UInt)]): UInt = {
+    require(entries.map(_._1).distinct.length == entries.length && entries.forall(e => e._1 >= 0 && e._1 < (1 << sel.getWidth)))
+    val width = entries.map(_._2.getWidth).max
+    def go(bit: Int, es: Seq[(Int, UInt)]): UInt =
+      if (es.isEmpty) 0.U(width.W)
+      else if (bit < 0) es.head._2.pad(width)
+      else {
+        val (hi, lo) = es.partition(e => ((e._1 >> bit) & 1) == 1)
+        Mux(sel(bit), go(bit - 1, hi), go(bit - 1, lo))
+      }
+    go(sel.getWidth - 1, entries)
   }
 }
