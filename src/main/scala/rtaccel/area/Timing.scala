@@ -29,11 +29,17 @@ object Timing {
     val dsp = t.obj.get("dsp_unsigned_bits").collect { case ujson.Arr(v) if v.length == 2 && v.forall(x => x.numOpt.exists(d => d >= 2 && d == d.toInt)) =>
       rtaccel.fp.DspShape(v(0).num.toInt, v(1).num.toInt, dspLevels.toInt)
     }.getOrElse(throw new InputError(s"family '$family' in $path needs dsp_unsigned_bits: [a, b], the widest unsigned operands one DSP block multiplies"))
+    // dsp_primitive: the block instantiated with its own registers (fp.DspTile); absent where synthesis infers the blocks
+    val registered = t.obj.get("dsp_primitive").filterNot(_.isNull) match {
+      case None => false
+      case Some(ujson.Str("MULT18X18D")) if dsp.a <= rtaccel.fp.DspTile.Bits && dsp.b <= rtaccel.fp.DspTile.Bits => true
+      case Some(v) => throw new InputError(s"family '$family' in $path: dsp_primitive $v is not one rtaccel instantiates; use \"MULT18X18D\" (with dsp_unsigned_bits at most [18, 18]) or remove it")
+    }
     // delay_ram_cycles: absent or null where delay chains map to shift-register LUTs
     val delayRam = t.obj.get("delay_ram_cycles").filterNot(_.isNull).map { v =>
       v.numOpt.filter(d => d >= 2 && d == d.toInt).map(_.toInt)
         .getOrElse(throw new InputError(s"family '$family' in $path: delay_ram_cycles must be a whole number >= 2 or null (got $v)"))
     }
-    FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""), dsp, delayRam)
+    FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""), dsp.copy(registered = registered), delayRam)
   }
 }

@@ -455,10 +455,20 @@ object Fp {
       o.sp := special(isNaN, ua.isInf || ub.isInf, ua.isZero || ub.isZero, o.sign)
       o
     }
-    var parts = pipe.step(in, Depth.dsp(pipe.dsp)) { x =>
+    val expOf = (x: MulIn) => (x.expA.zext.pad(ew) + x.expB.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
+    var parts = if (tiled && pipe.dsp.registered) {
+      // the blocks with their own operand and result registers (DspTile): the fields beside the products wait as long
+      // in flip-flops, and the exponent's sum goes in front of them (a register first when it would pass the budget)
+      val x = pipe.step(in, Depth.carry(ew))(v => v)
+      val o = Wire(new MulParts(widths, ew))
+      o.sign := pipe.beside(x.v.sign, DspTile.latency); o.toPos := pipe.beside(x.v.toPos, DspTile.latency)
+      o.sp := pipe.beside(x.v.sp, DspTile.latency); o.exp := pipe.beside(expOf(x.v), DspTile.latency)
+      for ((((a0, a1), (b0, b1)), i) <- tiles.zipWithIndex) o.parts(i) := DspTile(x.v.sigA(a1 - 1, a0), x.v.sigB(b1 - 1, b0))
+      Timed(o, x.at + DspTile.latency, 0)
+    } else pipe.step(in, Depth.dsp(pipe.dsp)) { x =>
       val o = Wire(new MulParts(widths, ew))
       o.sign := x.sign; o.toPos := x.toPos; o.sp := x.sp
-      o.exp := (x.expA.zext.pad(ew) + x.expB.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
+      o.exp := expOf(x)
       for ((((a0, a1), (b0, b1)), i) <- tiles.zipWithIndex) o.parts(i) := x.sigA(a1 - 1, a0) * x.sigB(b1 - 1, b0)
       o
     }

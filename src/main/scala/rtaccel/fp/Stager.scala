@@ -14,12 +14,15 @@ final case class Timed[+T <: Data](v: T, at: Int, depth: Int) {
 
 /** A family's DSP block (boards/timing.json): the widest unsigned operands it multiplies without fabric logic
   * (`dsp_unsigned_bits`: Xilinx's DSP48, 25 x 18 signed, 24 x 17; Lattice ECP5's MULT18X18D 18 x 18) and its
-  * unregistered multiply in LUT levels (`dsp_levels`, which the timing proxy counts too: area.Levels).
+  * unregistered multiply in LUT levels (`dsp_levels`, which the timing proxy counts too: area.Levels). `registered`
+  * (`dsp_primitive`: MULT18X18D): with PIPELINE, each tile is the block with its own input and output registers
+  * ([[DspTile]]), two cycles with no fabric logic between them.
   */
-final case class DspShape(a: Int, b: Int, levels: Int = 4) {
+final case class DspShape(a: Int, b: Int, levels: Int = 4, registered: Boolean = false) {
   require(a >= 2 && b >= 2, s"a DSP block multiplies at least 2 x 2 bits (got $a x $b)")
   require(levels >= 0, s"a DSP block's levels must be >= 0 (got $levels)")
-  override def toString: String = s"${a}x$b/$levels"
+  require(!registered || (a <= DspTile.Bits && b <= DspTile.Bits), s"registered DSP tiles are at most ${DspTile.Bits} x ${DspTile.Bits} bits (got $a x $b)")
+  override def toString: String = s"${a}x$b/$levels" + (if (registered) "/reg" else "")
 }
 object DspShape {
   val Dsp48: DspShape = DspShape(24, 17, 4)
@@ -39,6 +42,8 @@ final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, 
   private var placed = Stager.Census()
   /** The register bits this Stager has placed so far (a census for the cost model; synthesis may trim unused ones). */
   def census: Stager.Census = placed
+  /** x delayed `cycles` by flip-flops beside a unit with registers of its own (a DSP tile), counted in the census. */
+  def beside[T <: Data](x: T, cycles: Int): T = { count(x, cycles); ShiftRegister(x, cycles) }
   private def count(x: Data, cycles: Int): Unit = {
     val w = Stager.knownWidth(x).toLong
     placed = placed + (if (cycles >= Stager.ChainMin) Stager.Census(w * cycles, w * cycles, w * ((cycles + 31) / 32)) else Stager.Census(w * cycles))

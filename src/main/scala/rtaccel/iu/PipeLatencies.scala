@@ -5,7 +5,7 @@ import rtaccel.config.PlatformParams
 import rtaccel.fp.{FpDivPipe, FpFormat, Stager}
 
 /** Cycles from input to result of the fixed-latency pipes a configuration builds (they follow PIPELINE's budget):
-  * the box test, the triangle test of TRI_TEST and the TC's ray preparation (1/d). The register map reports them
+  * the box test, the triangle test of TRI_TEST and the TC's ray preparation (1/d of the three axes on one divider). The register map reports them
   * (RegMap.Pipeline), so a host or a waveform reader knows the build's depths.
   * `census`: the three pipes' registers (box, tri with its divider, one ray-preparation divider) as their Stagers
   * counted them (`of` fills it in; the board top, which needs only the latencies, leaves it empty).
@@ -42,6 +42,6 @@ object PipeLatencies {
       case rtaccel.config.TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.latency, t.census)
     }
     private val prep = Module(new FpDivPipe(FpFormat.fp32, p.divStages, p.stageBudget))
-    val latencies: PipeLatencies = PipeLatencies(box.latency, tri, prep.latency, Seq(box.census, triBits, prep.census))
+    val latencies: PipeLatencies = PipeLatencies(box.latency, tri, rtaccel.tc.TraversalController.prepLatency(prep.latency), Seq(box.census, triBits, prep.census))
   }
 }

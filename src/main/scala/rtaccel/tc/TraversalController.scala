@@ -12,8 +12,9 @@ class HostRay extends Bundle {
   val f = Vec(8, UInt(32.W))
 }
 
-/** Traversal controller (paper Section 4): prepares each host ray (1/d with three pipelined dividers,
-  * one ray per cycle), hands it to the lowest-numbered free TU, and returns exactly one result per ray.
+/** Traversal controller (paper Section 4): prepares each host ray (1/d of its three axes in turn on one pipelined
+  * divider, so a ray every third cycle), hands it to the lowest-numbered free TU, and returns exactly one result per
+  * ray.
   */
 class TraversalController(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
@@ -25,30 +26,43 @@ class TraversalController(p: PlatformParams) extends Module {
   private val f = FpFormat.fp32
   private val one = "h3f800000".U(32.W)
 
-  // Ray preparation: the pipeline cannot stall, so a ray enters only when the queue behind it has room
-  // for everything already in flight. `credits` is that room (the queue's size less the rays in the dividers and
-  // in the queue), kept in a register of its own so `ready` is a compare with zero: summing the queue's count with
-  // an in-flight counter put an adder and a compare in front of every input's handshake (the TC's routed critical
-  // path on ECP5).
-  val divs = Seq.fill(TraversalController.dividers)(Module(new FpDivPipe(f, p.divStages, p.stageBudget)))
-  private val lat = divs.head.latency
-  val prepared = Module(new Queue(new TuRay(p), lat + 2))
-  val credits = RegInit((lat + 2).U(log2Ceil(lat + 3).W))
-  io.in.ready := credits =/= 0.U
-  for (a <- 0 until 3) {
-    divs(a).io.in.valid := io.in.fire
-    divs(a).io.in.bits.a := one
-    divs(a).io.in.bits.b := io.in.bits.f(3 + a)
+  // Ray preparation: one divider takes dx of a ray in the cycle the ray is accepted and dy, dz in the next two (a
+  // divider per axis cost 2 x ~2,000 LUT4 and ~2,300 flip-flops more on ECP5, for a rate of a ray per cycle that
+  // no configuration uses: a TU holds a ray for hundreds of cycles). The pipeline cannot stall, so a ray enters only
+  // when the queue behind it has room for everything already in flight. `credits` is that room (the queue's size
+  // less the rays in the divider and in the queue), kept in a register of its own so `ready` is a compare with zero:
+  // summing the queue's count with an in-flight counter put an adder and a compare in front of every input's
+  // handshake (the TC's routed critical path on ECP5).
+  val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget))
+  /** Cycles from a ray's acceptance to its prepared copy (1/dz leaves the divider last). */
+  val prepLatency: Int = TraversalController.prepLatency(div.latency)
+  private val slots = prepLatency / TraversalController.axes + 2 // rays the divider can hold, and one waiting
+  val prepared = Module(new Queue(new TuRay(p), slots))
+  val credits = RegInit(slots.U(log2Ceil(slots + 1).W))
+  val inAxis = RegInit(0.U(2.W)) // the axis the divider takes next: 0 = ready for a ray
+  val heldD = Reg(Vec(2, UInt(32.W))) // dy, dz of the ray being fed
+  io.in.ready := credits =/= 0.U && inAxis === 0.U
+  when(io.in.fire) { inAxis := 1.U; heldD := VecInit(io.in.bits.f(4), io.in.bits.f(5)) }
+    .elsewhen(inAxis =/= 0.U) { inAxis := Mux(inAxis === 2.U, 0.U, inAxis + 1.U) }
+  div.io.in.valid := io.in.fire || inAxis =/= 0.U
+  div.io.in.bits.a := one
+  div.io.in.bits.b := Mux(inAxis === 0.U, io.in.bits.f(3), heldD(inAxis(1)))
+  // the results leave in the same order, three per ray: the axis of each by a counter
+  val outAxis = RegInit(0.U(2.W))
+  val invXY = Reg(Vec(2, UInt(32.W)))
+  when(div.io.out.valid) {
+    outAxis := Mux(outAxis === 2.U, 0.U, outAxis + 1.U)
+    when(outAxis =/= 2.U) { invXY(outAxis(0)) := div.io.out.bits }
   }
-  val rayDelayed = p.pipe.chain(io.in.bits, lat) // in LUT RAM where flip-flops are dear (fp.Stager.chain)
-  val outValid = divs.map(_.io.out.valid).reduce(_ && _) // the three run in lockstep
+  val rayDelayed = p.pipe.chain(io.in.bits, prepLatency) // in LUT RAM where flip-flops are dear (fp.Stager.chain)
+  val outValid = div.io.out.valid && outAxis === 2.U
   credits := credits - io.in.fire.asUInt + prepared.io.deq.fire.asUInt
   prepared.io.enq.valid := outValid
   prepared.io.enq.bits.id := rayDelayed.id
   for (a <- 0 until 3) {
     prepared.io.enq.bits.ray.o(a) := rayDelayed.f(a)
     prepared.io.enq.bits.ray.d(a) := rayDelayed.f(3 + a)
-    prepared.io.enq.bits.ray.inv(a) := divs(a).io.out.bits
+    prepared.io.enq.bits.ray.inv(a) := (if (a < 2) invXY(a) else div.io.out.bits)
   }
   prepared.io.enq.bits.ray.tmin := rayDelayed.f(6)
   prepared.io.enq.bits.tmax := rayDelayed.f(7)
@@ -59,7 +73,7 @@ class TraversalController(p: PlatformParams) extends Module {
   // RAM's read address in the same cycle (the TC's routed critical path on ECP5 once the credits were in).
   private val ready = rtaccel.arb.Slice(p, prepared.io.deq)
   /** Cycles from a ray's acceptance to its offer to a free TU: the dividers, the ray queue and the dispatch queue. */
-  val dispatchLatency: Int = lat + 1 + (if (p.stageBudget.isDefined) 1 else 0)
+  val dispatchLatency: Int = prepLatency + 1 + (if (p.stageBudget.isDefined) 1 else 0)
   // With PIPELINE the TUs' ready is seen two cycles late, less the TUs offered a ray since: a TU leaves idle only
   // by taking a ray, so one seen free is still free (asserted below). The TUs' ready is registered, and the choice
   // of the lowest such TU is made from registers and registered (choosing from registered values is the same), so
@@ -93,6 +107,10 @@ class TraversalController(p: PlatformParams) extends Module {
 }
 
 object TraversalController {
-  /** 1/d per axis, one pipelined divider each (the cost model counts them). */
-  val dividers: Int = 3
+  /** Pipelined dividers of the ray preparation (the cost model counts them): one, shared by the axes. */
+  val dividers: Int = 1
+  /** Axes per ray: the divider takes one per cycle. */
+  val axes: Int = 3
+  /** Cycles from a ray's acceptance to its prepared copy, for a divider of `divLatency` cycles. */
+  def prepLatency(divLatency: Int): Int = divLatency + axes - 1
 }

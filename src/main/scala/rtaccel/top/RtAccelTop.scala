@@ -95,7 +95,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(clusterNodeCache, p.primCache, p.mppl),
     respBufferBeats = if (p.mcResponseBuffers) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
-  private val latencies = rtaccel.iu.PipeLatencies(ius.head.boxPipe.latency, ius.head.triLatency, tc.divs.head.latency)
+  private val latencies = rtaccel.iu.PipeLatencies(ius.head.boxPipe.latency, ius.head.triLatency, tc.prepLatency)
   val regs = Module(new RegFile(RtAccelTop.configWords(p, latencies), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
   regs.io.lite <> io.lite
   io.irq := regs.io.irq

@@ -37,8 +37,9 @@ class FpPipedSpec extends AnyFunSuite with ChiselScalatestTester {
   private val nRandom = 60000
   // budgets: the paper's xc5v at 150 MHz (6) and the deepest that still splits every segment (2), on Xilinx's DSP48;
   // a made-up 7 x 9 DSP block cuts the product into 12 tiles summed over four levels (the tree ECP5's 18 x 18 blocks
-  // use with four tiles); make regress adds 4 and 9 levels and ECP5's block itself
-  private val runs = Seq((2, DspShape.Dsp48), (6, DspShape.Dsp48), (3, DspShape(7, 9))) ++
+  // use with four tiles); ECP5's blocks with their own registers (DspTile, two cycles a tile); make regress adds 4 and
+  // 9 levels and ECP5's block inferred
+  private val runs = Seq((2, DspShape.Dsp48), (6, DspShape.Dsp48), (3, DspShape(7, 9)), (5, DspShape(18, 18, 3, registered = true))) ++
     (if (rtaccel.Regress.full) Seq((4, DspShape.Dsp48), (9, DspShape.Dsp48), (2, DspShape(18, 18))) else Nil)
   test("a product's tiles cover each bit pair of the operands once, within the DSP block") {
     for (n <- Seq(8, 11, 17, 18, 24, 25, 53); dsp <- Seq(DspShape.Dsp48, DspShape(18, 18), DspShape(7, 9))) {

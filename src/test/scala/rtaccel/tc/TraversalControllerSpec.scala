@@ -95,7 +95,6 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
     val rnd = new Random(seed * 7919 + 1)
     var cycles = 0L
     test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
-      val lat = dut.divs.head.latency
       sealed trait TuState
       case class Free(from: Long) extends TuState
       case class Busy(r: HostRay, until: Long) extends TuState
@@ -222,22 +221,28 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
     }
   }
 
-  test("one ray per cycle when TUs are free: no stall, always to TU 0, in order") {
+  test("a ray every third cycle when TUs are free (one divider, three axes): no other stall, always to TU 0, in order") {
     val p = fixed(5, 6)
     val rays = hostRays(11, 64)
+    // the divider has divStages cycles (PIPELINE=none), dz enters it two cycles after the ray, and the ray queue is a
+    // cycle: a ray accepted at cycle 3k reaches TU 0 at 3k + divStages + 3
+    val first = p.divStages + 3
     test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
       for (i <- 0 until p.tus) { dut.io.tuRay(i).ready.poke(true.B); dut.io.tuResult(i).valid.poke(false.B) }
       dut.io.out.ready.poke(true.B)
       var got = 0
-      for (cycle <- 0 until rays.length + p.divStages + 1) {
-        val offering = cycle < rays.length
+      for (cycle <- 0 until 3 * rays.length + first + 1) {
+        val k = cycle / 3
+        val offering = k < rays.length
         dut.io.in.valid.poke(offering.B)
-        if (offering) { pokeRay(dut, rays(cycle)); dut.io.in.ready.expect(true.B, s"cycle $cycle: the TC stalled") }
+        if (offering) {
+          pokeRay(dut, rays(k))
+          dut.io.in.ready.expect((cycle % 3 == 0).B, s"cycle $cycle: the TC takes a ray at every third cycle and only then")
+        }
         for (i <- 1 until p.tus) dut.io.tuRay(i).valid.expect(false.B)
-        if (cycle >= p.divStages + 1) {
-          dut.io.tuRay(0).valid.expect(true.B, s"cycle $cycle: a ray per cycle after the divider latency")
-          checkPrepared(dut, 0, rays(got), s"cycle $cycle"); got += 1
-        } else dut.io.tuRay(0).valid.expect(false.B)
+        val out = cycle >= first && (cycle - first) % 3 == 0 && (cycle - first) / 3 < rays.length
+        dut.io.tuRay(0).valid.expect(out.B, s"cycle $cycle: a ray at 3k + $first")
+        if (out) { checkPrepared(dut, 0, rays(got), s"cycle $cycle"); got += 1 }
         dut.clock.step()
       }
       assert(got == rays.length)
@@ -256,7 +261,9 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
         if (dut.io.in.ready.peek().litToBoolean) next += 1
         dut.clock.step()
       }
-      assert(next == p.divStages + 2, s"took $next rays with every TU busy, want the queue's ${p.divStages + 2}")
+      // the queue holds the rays the divider can hold at a ray every third cycle and one more: (divStages + 2) / 3 + 2
+      val slots = (p.divStages + 2) / 3 + 2
+      assert(next == slots, s"took $next rays with every TU busy, want the queue's $slots")
       // free TU 2 only, then TU 1 too: lowest free first
       var got = 0
       dut.io.tuRay(2).ready.poke(true.B)
