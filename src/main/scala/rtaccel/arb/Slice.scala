@@ -22,12 +22,15 @@ class RegSlice[T <: Data](gen: T) extends Module {
   io.enq.ready := !skidValid
   io.deq.valid := outValid
   io.deq.bits := out
+  // The data registers load whether or not an item arrives (their valid bits say whether they hold one), so a load
+  // enable never waits for `enq.valid`: a producer's valid (a queue's pointer compare) reached every bit's enable
+  // in the same cycle (the TC's routed critical path on ECP5, a 385-bit ray).
   when(io.deq.ready || !outValid) { // the output register takes the oldest item held, else the one arriving
     outValid := skidValid || io.enq.valid
-    when(skidValid || io.enq.valid) { out := Mux(skidValid, skid, io.enq.bits) }
+    out := Mux(skidValid, skid, io.enq.bits)
     skidValid := false.B
-  }.elsewhen(io.enq.valid && !skidValid) {
-    skidValid := true.B
+  }.elsewhen(!skidValid) {
+    skidValid := io.enq.valid
     skid := io.enq.bits
   }
 }
