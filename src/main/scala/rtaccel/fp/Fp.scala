@@ -41,6 +41,26 @@ object Fp {
   }
 
   /** x << amt truncated to x's width, as a logarithmic shifter (no widened intermediate). */
+  /** x > c for a constant c, as AND/OR logic of x's bits: at the highest bit where they differ, x has the 1.
+    * Synthesis maps a comparison operator to a carry chain, which against a constant costs a chain of cells and its
+    * delay in series with what follows (on ECP5 three CCU2C for a 5-bit compare) where a few LUTs do.
+    */
+  private[fp] def gtConst(x: UInt, c: BigInt): Bool = {
+    val w = x.getWidth
+    if (c < 0) true.B
+    else if (c >= (BigInt(1) << w) - 1) false.B
+    else (0 until w).foldLeft(false.B)((below, i) => if (c.testBit(i)) x(i) && below else x(i) || below)
+  }
+  private[fp] def geConst(x: UInt, c: BigInt): Bool = gtConst(x, c - 1)
+  private[fp] def ltConst(x: UInt, c: BigInt): Bool = !geConst(x, c)
+  /** The same for a signed x: its two's complement with the sign bit flipped orders as unsigned, offset by 2^(w-1). */
+  private[fp] def gtConst(x: SInt, c: BigInt): Bool = {
+    val w = x.getWidth
+    gtConst(x.asUInt ^ (BigInt(1) << (w - 1)).U(w.W), c + (BigInt(1) << (w - 1)))
+  }
+  private[fp] def geConst(x: SInt, c: BigInt): Bool = gtConst(x, c - 1)
+  private[fp] def ltConst(x: SInt, c: BigInt): Bool = !geConst(x, c)
+
   private[fp] def shlTrunc(x: UInt, amt: UInt): UInt = {
     val n = x.getWidth
     amt.asBools.zipWithIndex.foldLeft(x) { case (v, (bit, i)) =>
@@ -168,15 +188,15 @@ object Fp {
       val sig = if (n > n0) Cat(r.sig, 0.U((n - n0).W)) else r.sig
       val ex = r.exp.pad(w)
       // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
-      val leftCase = if (canUnderflow) ex >= 1.S else true.B
+      val leftCase = if (canUnderflow) geConst(ex, 1) else true.B
       // leading zeros of sig (sig != 0), saturated at maxLs via a sentinel bit
       val lz = if (maxLs >= n - 1) lzc(sig) else lzc(Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
       val room = ex - 1.S
-      val roomSat = Mux(room > n.S, n.U, room.asUInt(log2Ceil(n + 1) - 1, 0))
+      val roomSat = Mux(gtConst(ex, n + 1), n.U, room.asUInt(log2Ceil(n + 1) - 1, 0)) // room > n
       val sl = Mux(lz < roomSat, lz, roomSat)
       // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
       val rAmt = 1.S - ex
-      val rSat = Mux(rAmt > (j + 1).S, (j + 1).U, rAmt.asUInt(log2Ceil(j + 2) - 1, 0))
+      val rSat = Mux(ltConst(ex, -j), (j + 1).U, rAmt.asUInt(log2Ceil(j + 2) - 1, 0)) // rAmt > j + 1
       val o = Wire(new NormMid(n, w, sl.getWidth, rSat.getWidth))
       o.sign := r.sign; o.exp := ex; o.sig := sig; o.sl := sl; o.rSat := rSat; o.leftCase := leftCase
       o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
@@ -186,7 +206,7 @@ object Fp {
     val norm = pipe.step(mid, Depth.shift(n) + (if (canUnderflow) 1 else 0)) { r =>
       // left: the bits that stay below the window, by mask (bit i lands at i + sl), so the shifter has m+2 outputs
       lazy val shl = shlTrunc(r.sig, r.sl)
-      val leftSig = if (n > j) Cat(shlTop(r.sig, r.sl, j - 1), (0 to n - j).map(i => r.sig(i) && r.sl < (n - j + 1 - i).U).reduce(_ || _)) else shl
+      val leftSig = if (n > j) Cat(shlTop(r.sig, r.sl, j - 1), (0 to n - j).map(i => r.sig(i) && ltConst(r.sl, n - j + 1 - i)).reduce(_ || _)) else shl
       val o = Wire(new RoundIn(j, w))
       if (canUnderflow) {
         // right: shifted by j + 1 or more, everything lands below the window: the saturation above
@@ -212,7 +232,7 @@ object Fp {
       o.rounded := kept +& up // m+2 bits; carrying into bit m+1 moves to the next binade
       // beside the increment: the exponent field of the packing below
       val eM1 = r.exp - 1.S
-      o.bigExp := eM1 >= f.maxExp.S
+      o.bigExp := geConst(r.exp, f.maxExp + 1) // eM1 >= maxExp
       o.eLow := eM1.asUInt(e - 1, 0)
       o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp
       o
@@ -224,7 +244,7 @@ object Fp {
       // Packing trick: ((exp-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
       // (hidden bit 0, exp = 1) packs with exponent field 0, and a rounding carry bumps the exponent.
       val sum = Cat(r.eLow, 0.U(m.W)) +& r.rounded
-      val ovf = r.bigExp || sum >= (BigInt(f.maxExp) << m).U
+      val ovf = r.bigExp || geConst(sum, BigInt(f.maxExp) << m)
       // an overflow rounded toward zero stays at the largest finite value
       val ovfValue = awayDir.fold(packInf(f, sign))(a => Mux(a, packInf(f, sign), Cat(sign, (f.maxExp - 1).U(e.W), Fill(m, 1.U(1.W)))))
       val finite = Mux(ovf, ovfValue, Cat(sign, sum(e + m - 1, 0)))
@@ -314,11 +334,11 @@ object Fp {
     // 2: align y; shifted-out bits are ORed into the LSB
     val al = pipe.step(sw, Depth.carry(f.expBits) + Depth.shift(dMax) + 1) { r =>
       val d = r.xExp - r.yExp
-      val dSat = Mux(d > dMax.U, dMax.U, d)
+      val dSat = Mux(gtConst(d, dMax), dMax.U, d)
       val yAligned = Cat(r.ySig, 0.U(g.W)) >> dSat
       // the bits shifted below the sticky position, by mask: bit i of ySig is lost when i + g < dSat (one LUT per
       // bit beside the shifter, whose low half then goes unused)
-      val yLost = (0 to m).map(i => r.ySig(i) && dSat > (i + g).U).reduce(_ || _)
+      val yLost = (0 to m).map(i => r.ySig(i) && gtConst(dSat, i + g)).reduce(_ || _)
       val o = Wire(new AddAligned(f))
       o.xSign := r.xSign; o.xExp := r.xExp; o.effSub := r.effSub; o.toPos := r.toPos; o.sp := r.sp; o.zeroSign := r.zeroSign
       o.yExt := Cat(0.U(1.W), yAligned | yLost)
