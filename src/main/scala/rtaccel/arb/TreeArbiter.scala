@@ -26,9 +26,17 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boo
     val idx = UInt(idxBits.W)
   }
 
-  /** One level: groups of fanIn inputs, each arbitrated and queued, their winners tagged with their full index. */
+  /** One level: groups of fanIn inputs, each arbitrated and queued, their winners tagged with their full index. The
+    * queues are register slices (two entries, valid and ready from registers): a two-entry Queue's valid and ready
+    * are its pointers' compare, which chained from level to level into the next queue's RAM write (the TC's routed
+    * critical path on ECP5, through five queues of its 32-way result tree).
+    */
   private def level(ins: Seq[DecoupledIO[Tagged]], leaves: Boolean): Seq[DecoupledIO[Tagged]] =
-    ins.grouped(fanIn).map(g => Queue(arbitrate(g, leaves), 2)).toSeq
+    ins.grouped(fanIn).map { g =>
+      val s = Module(new RegSlice(new Tagged))
+      s.io.enq <> arbitrate(g, leaves)
+      s.io.deq
+    }.toSeq
   private def arbitrate(g: Seq[DecoupledIO[Tagged]], leaves: Boolean): DecoupledIO[Tagged] =
     if (leaves && heldInputs) fed(Module(new GrantArbiter(new Tagged, g.length)).io, g)
     else if (g.length == 1) g.head
