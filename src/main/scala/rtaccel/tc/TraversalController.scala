@@ -88,9 +88,15 @@ class TraversalController(p: PlatformParams) extends Module {
       val none = VecInit(Seq.fill(p.tus)(false.B))
       val wasReady = RegNext(VecInit(io.tuRay.map(_.ready)), none)
       val wasOffered = RegNext(offered, none)
-      // free in the next cycle as seen: ready two cycles before it, offered no ray in either cycle since
-      val freeNext = (0 until p.tus).map(i => wasReady(i) && !wasOffered(i) && !offered(i))
-      RegNext(VecInit(PriorityEncoderOH(freeNext)), none)
+      // free in the next cycle as seen: ready two cycles before it, offered no ray in either cycle since. This cycle's
+      // offer (one TU at most) enters only at the end: the lowest and the second-lowest of the rest come from
+      // registers, and the offer picks between them (through the 32-way priority chain it was the TC's routed
+      // critical path on ECP5)
+      val seen = Cat((0 until p.tus).map(i => wasReady(i) && !wasOffered(i)).reverse)
+      val first = PriorityEncoderOH(seen)
+      val second = PriorityEncoderOH(seen & ~first)
+      val taken = (first & offered.asUInt).orR
+      RegNext(VecInit(Mux(taken, second, first).asBools), none)
     }
   ready.ready := target.reduce(_ || _)
   for ((t, i) <- io.tuRay.zipWithIndex) {
