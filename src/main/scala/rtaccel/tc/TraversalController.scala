@@ -88,15 +88,9 @@ class TraversalController(p: PlatformParams) extends Module {
       val none = VecInit(Seq.fill(p.tus)(false.B))
       val wasReady = RegNext(VecInit(io.tuRay.map(_.ready)), none)
       val wasOffered = RegNext(offered, none)
-      // free in the next cycle as seen: ready two cycles before it, offered no ray in either cycle since. This cycle's
-      // offer (one TU at most) enters only at the end: the lowest and the second-lowest of the rest come from
-      // registers, and the offer picks between them (through the 32-way priority chain it was the TC's routed
-      // critical path on ECP5)
-      val seen = Cat((0 until p.tus).map(i => wasReady(i) && !wasOffered(i)).reverse)
-      val first = PriorityEncoderOH(seen)
-      val second = PriorityEncoderOH(seen & ~first)
-      val taken = (first & offered.asUInt).orR
-      RegNext(VecInit(Mux(taken, second, first).asBools), none)
+      // free in the next cycle as seen: ready two cycles before it, offered no ray in either cycle since
+      val freeNext = (0 until p.tus).map(i => wasReady(i) && !wasOffered(i) && !offered(i))
+      RegNext(VecInit(TraversalController.lowest(freeNext)), none)
     }
   ready.ready := target.reduce(_ || _)
   for ((t, i) <- io.tuRay.zipWithIndex) {
@@ -117,6 +111,11 @@ object TraversalController {
   val dividers: Int = 1
   /** Axes per ray: the divider takes one per cycle. */
   val axes: Int = 3
+  /** The lowest set bit of xs, one-hot (none when none is set): each bit against an OR of the bits below it, which
+    * synthesis builds as trees (a few levels for 32 TUs) where PriorityEncoderOH is a chain of muxes as long as xs
+    * (the TC's routed critical path on ECP5).
+    */
+  def lowest(xs: Seq[Bool]): Seq[Bool] = xs.indices.map(i => if (i == 0) xs(0) else xs(i) && !VecInit(xs.take(i)).asUInt.orR)
   /** Cycles from a ray's acceptance to its prepared copy, for a divider of `divLatency` cycles. */
   def prepLatency(divLatency: Int): Int = divLatency + axes - 1
 }
