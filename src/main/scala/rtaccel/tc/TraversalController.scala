@@ -101,7 +101,8 @@ class TraversalController(p: PlatformParams) extends Module {
   }
 
   // Results: round-robin over TUs, with host backpressure.
-  val arb = Module(new rtaccel.arb.TreeArbiter(new TuResult, p.tus, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, p.tus), withChosen = false))
+  val arb = Module(new rtaccel.arb.TreeArbiter(new TuResult, p.tus, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, p.tus), withChosen = false,
+    heldInputs = p.stageBudget.isDefined)) // a TU holds its result until taken: registered grants at the leaves
   arb.io.in <> io.tuResult
   io.out <> arb.io.out
 }
