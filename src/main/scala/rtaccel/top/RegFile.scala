@@ -142,7 +142,7 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
     rResp := Mux(mapped, AxiLite.Okay.U, AxiLite.DecErr.U)
     // a LO read snapshots its counter's high word (the counter's index from the address, as for the words)
     val counterLo = rAddr >= CounterBase.U && rAddr < (CounterBase + 8 * counterNames.length).U && rAddr(2, 0) === 0.U
-    val counterIdx = (rAddr - CounterBase.U) >> 3
+    val counterIdx = rAddr(addrBits - 1, 3) - (CounterBase >> 3).U // CounterBase is a multiple of 8
     when(counterLo) { snapHi := RegFile.muxTree(counterIdx, io.counters.map(_(63, 32)).zipWithIndex.map(_.swap)); snapIdx := counterIdx }
   }
 }
