@@ -88,13 +88,15 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   // queue, not behind the tickets
   val hitQ = if (tagged) Some(Module(new ScanQueue(new Ticket, hw.cacheHitQueue))) else None
   val clean = ticketScan.fold(false.B)(t => hit && !t.io.held.map(e => e.valid && e.bits.fill && e.bits.line === dataLine).reduce(_ || _))
-  val s1Fire = s1Valid && Mux(clean, hitQ.fold(false.B)(_.io.enq.ready), ticketQ.enq.ready && (hit || missQ.io.enq.ready))
+  // a lookup leaves stage 1 when every queue its decision may enter has room, judged without the decision: the tag
+  // RAM's read data then reaches no enable, no RAM address and no ready, only data (a hit may wait for room in the
+  // miss queue it does not use; the order of lookups, and so every count, is unchanged)
+  val roomAll = ticketQ.enq.ready && missQ.io.enq.ready && hitQ.fold(true.B)(_.io.enq.ready)
+  val s1Fire = s1Valid && roomAll
   when(s1Fire) { s1Valid := false.B }
-  // TAG_FORWARD=1: a new request enters stage 1 in the cycle the one there decides, when every queue that
-  // decision may enter has room (so it surely leaves; judged without the decision, which keeps the tag RAM's
-  // read data out of io.in.ready and the read address); its read gets the set that decision writes from the tag
-  // RAMs' write-first port (TagArray)
-  val advance = if (g0.p.tagForward) ticketQ.enq.ready && missQ.io.enq.ready && hitQ.fold(true.B)(_.io.enq.ready) else false.B
+  // TAG_FORWARD=1: a new request enters stage 1 in the cycle the one there decides; its read gets the set that
+  // decision writes from the tag RAMs' write-first port (TagArray)
+  val advance = if (g0.p.tagForward) roomAll else false.B
   io.in.ready := (!s1Valid || advance) && ready
   when(io.in.fire) { s1 := io.in.bits; s1Valid := true.B }
   val lookLine = Mux(s1Valid && !advance, s1.line, io.in.bits.line)
@@ -126,7 +128,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
     ready := !clearing
     if (!isHybrid) {
       hit := ds.head.hit; fill := ds.head.fill; dataLine := mainIdx
-      main.update(s1.line, ds.head, s1Fire, clearing, clearIdx)
+      main.update(s1.line, ds.head, s1Fire, true.B, clearing, clearIdx)
     } else {
       // a line is in at most one array; the DM line is replaced when the level policy allows, else the side
       // array is offered the line (its own empty/LRU victim + level rule); refused there too = bypass
@@ -135,8 +137,8 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
       hit := dm.hit || side.hit
       fill := !hit && (dm.fill || side.fill)
       dataLine := Mux(dm.hit || (!side.hit && dm.fill), mainIdx, sideIdx)
-      main.update(s1.line, dm, s1Fire && !side.hit, clearing, clearIdx)
-      arrays(1).update(s1.line, side, s1Fire && (side.hit || (!dm.hit && !dm.fill)), clearing, clearIdx)
+      main.update(s1.line, dm, s1Fire, !side.hit, clearing, clearIdx)
+      arrays(1).update(s1.line, side, s1Fire, side.hit || (!dm.hit && !dm.fill), clearing, clearIdx)
     }
   }
 

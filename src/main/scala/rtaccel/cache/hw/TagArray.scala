@@ -17,10 +17,10 @@ class SetEntry(ways: Int, tagBits: Int, stateBits: Int, levelBits: Int) extends 
   val state = UInt(stateBits.W) // zero-width (removed) for direct-mapped sets
 }
 
-/** What one access does to a set (combinational, from the set as read): hit, fill (a miss that allocates; a
-  * miss without fill is a bypass), the way hit or filled, and the set to write back.
+/** What one access does to a set (combinational, from the set as read, `prev`): hit, fill (a miss that allocates;
+  * a miss without fill is a bypass), the way hit or filled, and the set to write back.
   */
-final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: SetEntry)
+final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: SetEntry, val prev: SetEntry)
 
 /** The tag side of a set-associative array (`sets` x `ways`), a single-port synchronous RAM.
   * Lookup and fill follow the model's rules (docs/caches.md): a hit touches the way; a miss fills the lowest
@@ -91,16 +91,19 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
       next.way(w).level := level
     }
     if (pol.stateBits > 0) next.state := PolicyTables.touch(pol, e.state, way)
-    new Decision(hit, fill, if (ways == 1) 0.U else way, next)
+    new Decision(hit, fill, if (ways == 1) 0.U else way, next, e)
   }
 
-  /** The one write port: while `clearing`, empties set `clearSet` (the reset sweep); otherwise commits a
-    * decision when `en` (a hit or a fill; nothing to write for a refused fill).
+  /** The one write port: while `clearing`, empties set `clearSet` (the reset sweep); otherwise writes the set
+    * back whenever a lookup leaves (`fire`): the decision's set when `apply` and it hit or filled, else the set as
+    * read (a refused fill, or the other array's line in a hybrid cache, changes nothing). The enable and the
+    * address come from queue state alone: the set just read reaches only the write data, a shorter path from the
+    * block RAM's output than through the enable to the address.
     */
-  def update(line: UInt, d: Decision, en: Bool, clearing: Bool, clearSet: UInt): Unit = {
+  def update(line: UInt, d: Decision, fire: Bool, apply: Bool, clearing: Bool, clearSet: UInt): Unit = {
     val clearThis = clearing && clearSet < sets.U
-    wEn := clearThis || (!clearing && en && (d.hit || d.fill))
+    wEn := clearThis || (!clearing && fire)
     wSet := Mux(clearThis, clearSet(addrBits - 1, 0), setOf(line))
-    wData := Mux(clearThis, emptyEntry, d.next)
+    wData := Mux(clearThis, emptyEntry, Mux(apply && (d.hit || d.fill), d.next, d.prev))
   }
 }
