@@ -125,7 +125,7 @@ object Throughput {
     // PIPELINE's registers lengthen every node and leaf test, and its slices every access (the fit above is of the
     // fixed stages)
     val (boxExtra, triExtra) = rtaccel.iu.PipeLatencies.extraOverFixed(p)
-    def slices(cached: Boolean) = p.accessSliceCycles + (if (cached) 0 else p.passSliceCycles)
+    def slices(cached: Boolean) = p.accessSliceCycles + (if (cached) p.cacheSliceCycles else p.passSliceCycles)
     val overhead = nodeOverhead + primOverhead + (boxExtra + slices(s.nodeCache.isDefined)).toDouble * s.nodeAccesses +
       (triExtra + slices(s.primCache.isDefined)).toDouble * s.leafAccesses
     val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n

@@ -58,6 +58,10 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   private val isHybrid = c.policy == CachePolicy.Hybrid
   private val lineBits = log2Ceil(cg.dataLines)
   private val tagged = g.tagBits > 0 // RESP_ORDER=tagged: hits under misses
+  /** PIPELINE's registers (g0.p.cacheSliceCycles, 0 or 1): between a lookup's decision and the queues it enters
+    * (stage 2), and in front of the data RAM.
+    */
+  private val slice = if (g0.p.cacheSliceCycles > 0) 1 else 0
 
   class Ticket extends Bundle {
     val hit = Bool()
@@ -79,6 +83,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   io.stats.hits := hits; io.stats.misses := misses; io.stats.bypasses := bypasses
 
   // ---------------------------------------------------------------- lookup: stage 0 reads, stage 1 decides
+  // (PIPELINE: stage 2 holds the decision a cycle before it enters the queues)
   val s1 = Reg(g.pathReq)
   val s1Valid = RegInit(false.B)
   val ready = WireDefault(true.B) // false while the arrays are cleared or the static buffer is preloaded
@@ -87,16 +92,27 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   // RESP_ORDER=tagged: a hit is clean when no held ticket still fills its data line; it then waits in the hit
   // queue, not behind the tickets
   val hitQ = if (tagged) Some(Module(new ScanQueue(new Ticket, hw.cacheHitQueue))) else None
-  val clean = ticketScan.fold(false.B)(t => hit && !t.io.held.map(e => e.valid && e.bits.fill && e.bits.line === dataLine).reduce(_ || _))
-  // a lookup leaves stage 1 when every queue its decision may enter has room, judged without the decision: the tag
+  // a decision enters the queues when every queue it may enter has room, judged without the decision: the tag
   // RAM's read data then reaches no enable, no RAM address and no ready, only data (a hit may wait for room in the
   // miss queue it does not use; the order of lookups, and so every count, is unchanged)
   val roomAll = ticketQ.enq.ready && missQ.io.enq.ready && hitQ.fold(true.B)(_.io.enq.ready)
-  val s1Fire = s1Valid && roomAll
+  // PIPELINE: stage 2 takes a decision when it is empty or its own enters the queues this cycle; the tag RAM's read
+  // data then reaches stage 2's registers (and the tag RAM's write data) only, not the queues across the unit
+  val s2Valid = RegInit(false.B)
+  val s1Go = Wire(Bool())
+  val s1Fire = s1Valid && s1Go
   when(s1Fire) { s1Valid := false.B }
+  /** a decision entering the queues (`eFire`): stage 1's, or stage 2's with PIPELINE */
+  val eFire = if (slice == 0) s1Fire else s2Valid && roomAll
+  private def entering[T <: Data](x: T): T = if (slice == 0) x else RegEnable(x, s1Fire)
+  val (eHit, eFill, eLine, eReq) = (entering(hit), entering(fill), entering(dataLine), entering(s1))
+  s1Go := (if (slice == 0) roomAll else !s2Valid || eFire)
+  if (slice > 0) when(s1Fire) { s2Valid := true.B }.elsewhen(eFire) { s2Valid := false.B }
+  // every ticket older than the entering decision is held or done, so the check sees all the fills ahead of it
+  val clean = ticketScan.fold(false.B)(t => eHit && !t.io.held.map(e => e.valid && e.bits.fill && e.bits.line === eLine).reduce(_ || _))
   // TAG_FORWARD=1: a new request enters stage 1 in the cycle the one there decides; its read gets the set that
   // decision writes from the tag RAMs' write-first port (TagArray)
-  val advance = if (g0.p.tagForward) roomAll else false.B
+  val advance = if (g0.p.tagForward) s1Go else false.B
   io.in.ready := (!s1Valid || advance) && ready
   when(io.in.fire) { s1 := io.in.bits; s1Valid := true.B }
   val lookLine = Mux(s1Valid && !advance, s1.line, io.in.bits.line)
@@ -142,20 +158,20 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
     }
   }
 
-  ticketQ.enq.valid := s1Fire && !clean
-  ticketQ.enq.bits.hit := hit
-  ticketQ.enq.bits.fill := fill
+  ticketQ.enq.valid := eFire && !clean
+  ticketQ.enq.bits.hit := eHit
+  ticketQ.enq.bits.fill := eFill
   ticketQ.enq.bits.silent := false.B
-  ticketQ.enq.bits.line := dataLine
-  ticketQ.enq.bits.beats := s1.beats
-  for (t <- ticketQ.enq.bits.tag) t := s1.tag.get
-  for (q <- hitQ) { q.io.enq.valid := s1Fire && clean; q.io.enq.bits := ticketQ.enq.bits }
-  missQ.io.enq.valid := s1Fire && !hit
-  missQ.io.enq.bits.addr := s1.addr
-  missQ.io.enq.bits.beats := s1.beats
-  when(s1Fire) {
-    when(hit) { hits := hits + 1.U }.otherwise { misses := misses + 1.U }
-    when(!hit && !fill) { bypasses := bypasses + 1.U }
+  ticketQ.enq.bits.line := eLine
+  ticketQ.enq.bits.beats := eReq.beats
+  for (t <- ticketQ.enq.bits.tag) t := eReq.tag.get
+  for (q <- hitQ) { q.io.enq.valid := eFire && clean; q.io.enq.bits := ticketQ.enq.bits }
+  missQ.io.enq.valid := eFire && !eHit
+  missQ.io.enq.bits.addr := eReq.addr
+  missQ.io.enq.bits.beats := eReq.beats
+  when(eFire) {
+    when(eHit) { hits := hits + 1.U }.otherwise { misses := misses + 1.U }
+    when(!eHit && !eFill) { bypasses := bypasses + 1.U }
   }
   when(io.clearStats) { hits := 0.U; misses := 0.U; bypasses := 0.U }
   if (isBf) preload() // after the defaults above: its ticket and DRAM read override them while it runs
@@ -196,47 +212,59 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val beat = RegInit(0.U(g.beatsBits.W))
   val lastBeat = beat === head.beats - 1.U
   def addr(line: UInt, b: UInt): UInt = if (cg.beatBits == 0) line else Cat(line, b(cg.beatBits - 1, 0))
-  /** a data RAM read may issue when `q` has room for it and for the one in flight: at most depth - 2 beats queued or landing */
-  def room(q: QueueIO[FetchBeat], inflight: Bool): Bool = (q.count +& inflight.asUInt) <= (hw.cacheOutQueue - 2).U
+  // PIPELINE (`slice`): the data RAM's address, enable and write data leave flip-flops, a cycle after the read or
+  // write is decided, not the ticket queue's LUT RAM through the issue logic across the RAM's many blocks. Reads and
+  // writes shift together, so the order in which the RAM sees them, and every hazard, is unchanged; a read lands
+  // two cycles after its decision.
+  private def toRam[T <: Data](x: T): T = ShiftRegister(x, slice)
+  private def toRamValid(v: Bool): Bool = ShiftRegister(v, slice, false.B, true.B)
+  /** a read decided in cycle t lands in cycle t + 1 + slice; `flight(v)` is v for each cycle until then, the last
+    * the one landing */
+  def flight(v: Bool): Seq[Bool] = Seq.iterate(RegNext(v, false.B), 1 + slice)(RegNext(_, false.B))
+  /** a data RAM read may issue when `q` has room for it and for those in flight (`flying`). Unsliced: at most
+    * depth - 2 beats queued or landing. Sliced: depth - 1, and a DRAM beat waits while any in-order read flies, so
+    * nothing else enters `q` between a decision and its landing (a full-rate stream of reads keeps its rate).
+    */
+  def room(q: QueueIO[FetchBeat], flying: Seq[Bool]): Bool =
+    (q.count +& PopCount(flying)) <= (hw.cacheOutQueue - (if (slice == 0) 2 else 1)).U
 
-  // a data RAM read issued last cycle lands in outQ this cycle; reads are issued only when outQ will have room
-  val inflight = RegInit(false.B); val inflightLast = Reg(Bool())
-  val readIssue = ticketQ.deq.valid && head.hit && room(outQ.io, inflight)
+  // a data RAM read issued (decided) in one cycle lands in outQ 1 + slice cycles later, only when outQ has room
+  val readIssue = Wire(Bool())
+  val readFlight = flight(readIssue)
+  val inflight = readFlight.last
+  readIssue := ticketQ.deq.valid && head.hit && room(outQ.io, readFlight)
+  val inflightLast = ShiftRegister(lastBeat, 1 + slice)
   // RESP_ORDER=tagged: the clean hits' reads share the RAM's one read port; an in-order hit's read goes first
   val hitRead = hitQ.map { q =>
     val h = q.io.deq.bits
     val hBeat = RegInit(0.U(g.beatsBits.W))
     val hOut = Module(new Queue(g.respBeat, hw.cacheOutQueue))
-    val hInflight = RegInit(false.B); val hInflightLast = Reg(Bool()); val hInflightTag = Reg(UInt(g.tagBits.W))
-    val issue = q.io.deq.valid && !readIssue && room(hOut.io, hInflight)
+    val issue = Wire(Bool())
+    val hFlight = flight(issue)
+    issue := q.io.deq.valid && !readIssue && room(hOut.io, hFlight)
     val hLast = hBeat === h.beats - 1.U
-    hInflight := issue
-    when(issue) { hInflightLast := hLast; hInflightTag := h.tag.get; hBeat := Mux(hLast, 0.U, hBeat + 1.U) }
+    when(issue) { hBeat := Mux(hLast, 0.U, hBeat + 1.U) }
     q.io.deq.ready := issue && hLast
-    (issue, addr(h.line, hBeat), hOut, hInflight, hInflightLast, hInflightTag)
+    (issue, addr(h.line, hBeat), hOut, hFlight.last, ShiftRegister(hLast, 1 + slice), ShiftRegister(h.tag.get, 1 + slice))
   }
-  val rd = data.read(hitRead.fold(addr(head.line, beat)) { case (issue, a, _, _, _, _) => Mux(issue, a, addr(head.line, beat)) },
-    readIssue || hitRead.fold(false.B)(_._1))
-  inflight := readIssue; when(readIssue) { inflightLast := lastBeat }
+  val rd = data.read(toRam(hitRead.fold(addr(head.line, beat)) { case (issue, a, _, _, _, _) => Mux(issue, a, addr(head.line, beat)) }),
+    toRamValid(readIssue || hitRead.fold(false.B)(_._1)))
 
   val missHead = ticketQ.deq.valid && !head.hit
   // RESP_ORDER=tagged: a fill starts only when no queued clean hit still reads its data line (write after read)
   val fillBlocked = hitQ.fold(false.B)(q => head.fill && beat === 0.U && q.io.held.map(e => e.valid && e.bits.line === head.line).reduce(_ || _))
-  val canTakeMiss = missHead && !inflight && (head.silent || outQ.io.enq.ready) && !fillBlocked
+  val canTakeMiss = missHead && !readFlight.reduce(_ || _) && (head.silent || outQ.io.enq.ready) && !fillBlocked
   io.memResp.ready := canTakeMiss
   val missBeat = io.memResp.fire
-  when(missBeat && head.fill) { data.write(addr(head.line, beat), Cat(io.memResp.bits.err, io.memResp.bits.data)) }
+  when(toRamValid(missBeat && head.fill)) { data.write(toRam(addr(head.line, beat)), toRam(Cat(io.memResp.bits.err, io.memResp.bits.data))) }
 
   outQ.io.enq.valid := inflight || (missBeat && !head.silent)
   outQ.io.enq.bits.data := Mux(inflight, rd(dataBits - 1, 0), io.memResp.bits.data)
   outQ.io.enq.bits.err := Mux(inflight, rd(dataBits), io.memResp.bits.err)
   outQ.io.enq.bits.last := Mux(inflight, inflightLast, lastBeat)
-  // a DRAM beat is the head ticket's; a data RAM read lands a cycle after its issue, when an in-order hit's last
-  // read has already let its ticket go: the tag is kept with the read
-  for (t <- outQ.io.enq.bits.tag) {
-    val inflightTag = RegEnable(head.tag.get, readIssue)
-    t := Mux(inflight, inflightTag, head.tag.get)
-  }
+  // a DRAM beat is the head ticket's; a data RAM read lands after its issue, when an in-order hit's last read has
+  // already let its ticket go: the tag is kept with the read
+  for (t <- outQ.io.enq.bits.tag) t := Mux(inflight, ShiftRegister(head.tag.get, 1 + slice), head.tag.get)
 
   val beatDone = readIssue || missBeat
   when(beatDone) { beat := Mux(lastBeat, 0.U, beat + 1.U) }

@@ -18,9 +18,12 @@ class SetEntry(ways: Int, tagBits: Int, stateBits: Int, levelBits: Int) extends 
 }
 
 /** What one access does to a set (combinational, from the set as read, `prev`): hit, fill (a miss that allocates;
-  * a miss without fill is a bypass), the way hit or filled, and the set to write back.
+  * a miss without fill is a bypass), the way hit or filled, the set to write back (`next`) and whether it is
+  * written (`changes`: hit or fill; constant where the set's rule makes it so, to keep the RAM's output off the
+  * write).
   */
-final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: SetEntry, val prev: SetEntry)
+final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: SetEntry, val prev: SetEntry,
+                     val changes: Bool)
 
 /** The tag side of a set-associative array (`sets` x `ways`), a single-port synchronous RAM.
   * Lookup and fill follow the model's rules (docs/caches.md): a hit touches the way; a miss fills the lowest
@@ -40,7 +43,13 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
   val ways: Int = pol.ways
   val setBits: Int = log2Ceil(sets)
   val tagBits: Int = 32 - setBits
-  private def entryType = new SetEntry(ways, tagBits, pol.stateBits, levelBits)
+  /** A way keeps its line's level code only where the level policy reads it. */
+  private val keptLevelBits = if (lrp) levelBits else 0
+  /** A direct-mapped set without the level policy holds the line of the last lookup whatever it found: a hit
+    * leaves {valid, tag} as it was, a miss fills it, so the set to write back is known without reading the RAM.
+    */
+  private val alwaysFills = ways == 1 && !lrp
+  private def entryType = new SetEntry(ways, tagBits, pol.stateBits, keptLevelBits)
   private val mem = SyncReadMem(sets, entryType, ruw)
   private val addrBits = math.max(1, setBits)
 
@@ -85,13 +94,13 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
     val fill = !hit && (hasEmpty || levelOk)
     val way = Mux(hit, hitWay, allocWay)
     val next = WireDefault(e)
-    for (w <- 0 until ways) when(fill && (if (ways == 1) true.B else allocWay === w.U)) {
+    for (w <- 0 until ways) when(alwaysFills.B || fill && (if (ways == 1) true.B else allocWay === w.U)) {
       next.way(w).valid := true.B
       next.way(w).tag := tag
-      next.way(w).level := level
+      if (keptLevelBits > 0) next.way(w).level := level(keptLevelBits - 1, 0)
     }
     if (pol.stateBits > 0) next.state := PolicyTables.touch(pol, e.state, way)
-    new Decision(hit, fill, if (ways == 1) 0.U else way, next, e)
+    new Decision(hit, fill, if (ways == 1) 0.U else way, next, e, if (alwaysFills) true.B else hit || fill)
   }
 
   /** The one write port: while `clearing`, empties set `clearSet` (the reset sweep); otherwise writes the set
@@ -104,6 +113,6 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
     val clearThis = clearing && clearSet < sets.U
     wEn := clearThis || (!clearing && fire)
     wSet := Mux(clearThis, clearSet(addrBits - 1, 0), setOf(line))
-    wData := Mux(clearThis, emptyEntry, Mux(apply && (d.hit || d.fill), d.next, d.prev))
+    wData := Mux(clearThis, emptyEntry, Mux(apply && d.changes, d.next, d.prev))
   }
 }
