@@ -256,10 +256,10 @@ final case class PlatformParams(
     * with several clusters or channels the buffers keep one's R beats from waiting on another's (MemoryController).
     */
   def mcResponseBuffers: Boolean = nodeCache.entries > 0 || primCache.entries > 0 || ius > 1 || memChannels > 1 || respByPath
-  /** Cycles PIPELINE's slice on a pass-through path adds to its accesses, where the MC has response buffers (a
-    * cache path queues its DRAM reads already).
+  /** Cycles PIPELINE's slices add to a DRAM read of a path, where the MC has response buffers: one on the read, one
+    * on its beats into and one out of the buffer (a pass-through path pays them on every access, a cache on a miss).
     */
-  def passSliceCycles: Int = if (stageBudget.isDefined && mcResponseBuffers) 1 else 0
+  def passSliceCycles: Int = if (stageBudget.isDefined && mcResponseBuffers) 3 else 0
   /** Cycles PIPELINE's registers in a cache path add to its hits: a lookup's decision waits a cycle before it enters
     * the queues, and a data RAM read or write reaches the block RAMs a cycle after it is decided
     * (rtaccel.cache.hw.CachePath).

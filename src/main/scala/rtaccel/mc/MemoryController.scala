@@ -302,13 +302,11 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   }, maxOutstanding))
   val splitter = Module(new BurstSplitter(g))
   // Each path's DRAM-response sink: straight to the path, or a credit-managed buffer in front of it.
-  // with response buffers (DRAM may answer the paths out of request order) and PIPELINE, a pass-through path's
-  // reads pass a register slice (a cache path's leave its miss queue): the arbiter's ready ends there
+  // with response buffers (DRAM may answer the paths out of request order) and PIPELINE, a path's reads pass a
+  // register slice: the arbiter's ready and the credits end there, and a cache path's miss queue is not read into
+  // the arbiter
   val sinks = for ((path, i) <- paths.zipWithIndex) yield {
-    val req = path match {
-      case _: FetchPath if respBufferBeats > 0 => rtaccel.arb.Slice(p, path.io.memReq)
-      case _ => path.io.memReq
-    }
+    val req = if (respBufferBeats > 0) rtaccel.arb.Slice(p, path.io.memReq) else path.io.memReq
     if (respBufferBeats == 0) {
       arb.io.in(i) <> req
       path.io.memResp
@@ -321,8 +319,15 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
       req.ready := arb.io.in(i).ready && fits
       val taken = Mux(arb.io.in(i).fire, req.bits.beats, 0.U)
       free := free - taken + buf.io.deq.fire.asUInt
-      path.io.memResp <> buf.io.deq
-      buf.io.enq
+      // a path's ready for DRAM beats comes from its ticket queue's head (a cache) or the response order (a pass-
+      // through path): with PIPELINE it ends at a register slice, not in the buffer's pointers, credits and block
+      // RAM address (one cycle more on every DRAM read)
+      path.io.memResp <> rtaccel.arb.Slice(p, buf.io.deq)
+      // and the R beat, routed by the memory-order FIFO's head, enters the buffer's block RAM from a register slice
+      // (the credits already hold room for what the slice holds)
+      val in = Wire(Decoupled(new FetchBeat(axi.dataBits)))
+      buf.io.enq <> rtaccel.arb.Slice(p, in)
+      in
     }
   }
   // with PIPELINE the arbiter's choice passes a register slice (arb.Slice) before the splitter and the memory-order

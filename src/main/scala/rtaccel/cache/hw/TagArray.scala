@@ -30,7 +30,7 @@ final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: Set
   * empty way, else the policy's victim, which under the level policy (`lrp`) only if
   * LevelPolicy.allocate(victim level, incoming level, MAX_LEVEL); a refused fill changes nothing.
   * Protocol: `read(line)` in one cycle, the `Decision` on the next (the data stays valid while the same set
-  * is read again each cycle), `write` when the decision is taken.
+  * is read again each cycle), `write` when the decision is taken (one port: to the set being read).
   * `ruw`: what a read returns when it starts in the cycle its set is written. Undefined (the default) while a read
   * never overlaps a used write, as with one lookup per two cycles; WriteFirst for TAG_FORWARD=1, where the next
   * lookup's read starts in the cycle the decision before writes: the RAM's write-first port (a block RAM in
@@ -66,9 +66,15 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
     * keeps the memory's module apart (Yosys, hierarchical) can map to block RAM; a read port and a write port with
     * a clock each it can only map to LUT RAM. TAG_FORWARD=1 reads while the decision before writes: two ports.
     */
+  private val clearingNow = WireDefault(false.B)
+  /** Single port: a decision writes the set its lookup keeps reading while it waits (`read` names it again each
+    * cycle), so the address is the read's, or the sweep's while clearing: it does not wait on the write enable.
+    */
   private val rData: SetEntry =
-    if (ruw == SyncReadMem.Undefined) mem.readWrite(Mux(wEn, wSet, rSet), wData, true.B, wEn)
-    else { when(wEn) { mem.write(wSet, wData) }; mem.read(rSet, true.B) }
+    if (ruw == SyncReadMem.Undefined) {
+      when(wEn && !clearingNow) { assert(rSet === wSet, "TagArray: a decision writes another set than the one read") }
+      mem.readWrite(Mux(clearingNow, wSet, rSet), wData, true.B, wEn)
+    } else { when(wEn) { mem.write(wSet, wData) }; mem.read(rSet, true.B) }
 
   /** Starts a read of `line`'s set; the result is the entry one cycle later (undefined after a cycle that wrote). */
   def read(line: UInt): SetEntry = { rSet := setOf(line); rData }
@@ -111,6 +117,7 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
     */
   def update(line: UInt, d: Decision, fire: Bool, apply: Bool, clearing: Bool, clearSet: UInt): Unit = {
     val clearThis = clearing && clearSet < sets.U
+    clearingNow := clearing
     wEn := clearThis || (!clearing && fire)
     wSet := Mux(clearThis, clearSet(addrBits - 1, 0), setOf(line))
     wData := Mux(clearThis, emptyEntry, Mux(apply && d.changes, d.next, d.prev))
