@@ -244,11 +244,16 @@ object Fp {
       // Packing trick: ((exp-1) << m) + rounded. The hidden bit adds 1 to the exponent field, a subnormal
       // (hidden bit 0, exp = 1) packs with exponent field 0, and a rounding carry bumps the exponent.
       val sum = Cat(r.eLow, 0.U(m.W)) +& r.rounded
-      val ovf = r.bigExp || geConst(sum, BigInt(f.maxExp) << m)
+      // overflow: sum's exponent field eLow + hi >= maxExp, where hi = rounded >> m is 0, 1 or 2 (rounded <= 2^(m+1)).
+      // Judged from eLow and hi beside the carry chain, not from its sum: the add then feeds one mux, not a compare
+      val hi = r.rounded(m + 1, m)
+      def eLowGe(k: Int): Bool = geConst(r.eLow, BigInt(k))
+      val ovf = r.bigExp || Mux(hi(1), eLowGe(f.maxExp - 2), Mux(hi(0), eLowGe(f.maxExp - 1), eLowGe(f.maxExp)))
       // an overflow rounded toward zero stays at the largest finite value
       val ovfValue = awayDir.fold(packInf(f, sign))(a => Mux(a, packInf(f, sign), Cat(sign, (f.maxExp - 1).U(e.W), Fill(m, 1.U(1.W)))))
-      val finite = Mux(ovf, ovfValue, Cat(sign, sum(e + m - 1, 0)))
-      Mux(r.sp.nan, nan(f), Mux(r.sp.inf, packInf(f, r.sp.sign), Mux(r.sp.zero, packZero(f, r.sp.sign), finite)))
+      // every result but the packed sum, in the same priority (NaN, inf, zero, overflow), also beside the add
+      val other = Mux(r.sp.nan, nan(f), Mux(r.sp.inf, packInf(f, r.sp.sign), Mux(r.sp.zero, packZero(f, r.sp.sign), ovfValue)))
+      Mux(r.sp.nan || r.sp.inf || r.sp.zero || ovf, other, Cat(sign, sum(e + m - 1, 0)))
     }
   }
 
