@@ -10,10 +10,16 @@ import chisel3.util._
   * exactly once; the order among requesters is round robin within each group, and round robin over the groups.
   * `heldInputs`: every requester holds its request until it is taken (as a TU does); the groups at the leaves are
   * then GrantArbiters, whose grant is a register, so that a requester's valid and its ready do not meet in one
-  * cycle (a cycle more per request).
+  * cycle (a cycle more per request). `grantsEverywhere` (with heldInputs): every level's arbiters are GrantArbiters,
+  * since a level's register slices hold their items until taken as well, so no arbiter's choice runs from a slice's
+  * valid into the next slice's data in one cycle (the TC's routed critical path on ECP5). A cycle more per level, and
+  * a subtree with one busy input passes an item every other cycle: for streams far below one item a cycle (the TUs'
+  * results).
   */
-class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boolean = true, heldInputs: Boolean = false) extends Module {
+class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boolean = true, heldInputs: Boolean = false,
+    grantsEverywhere: Boolean = false) extends Module {
   require(n >= 1 && fanIn >= 2, s"a tree arbiter needs requesters (got $n) and a fan-in of 2 or more (got $fanIn)")
+  require(!grantsEverywhere || heldInputs, "grants at every level need requesters that hold their requests (heldInputs)")
   val io = IO(new Bundle {
     val in = Flipped(Vec(n, Decoupled(gen)))
     val out = Decoupled(gen)
@@ -40,6 +46,7 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boo
   private def arbitrate(g: Seq[DecoupledIO[Tagged]], leaves: Boolean): DecoupledIO[Tagged] =
     if (leaves && heldInputs) fed(Module(new GrantArbiter(new Tagged, g.length)).io, g)
     else if (g.length == 1) g.head
+    else if (grantsEverywhere) fed(Module(new GrantArbiter(new Tagged, g.length)).io, g)
     else fed(Module(new RRArbiter(new Tagged, g.length)).io, g)
   /** An arbiter's output, its inputs driven by g. */
   private def fed(a: ArbiterIO[Tagged], g: Seq[DecoupledIO[Tagged]]): DecoupledIO[Tagged] = {

@@ -183,11 +183,16 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     (box, tri)
   }
 
+  // with PIPELINE the MC's responses pass a register slice: a job queue's valid (the beats' ready) and the collection's
+  // wide load enables no longer reach into the MC's response mux and its caches' output queues in one cycle (the
+  // smallest platform's routed critical path on ECP5; a cycle more per access: PlatformParams.accessSliceCycles)
+  val resp = rtaccel.arb.Slice(p, io.mem.resp)
+  lazy val primResp = rtaccel.arb.Slice(p, io.mem.primResp.get)
   val (boxJob, triJob0) =
-    if (!p.respByPath) collect(jobQs(0).io.deq, io.mem.resp, None)
-    else if (p.respTagged) (collect(tableJobs(io.mem.resp, leaf = false), io.mem.resp, Some(false))._1,
-      collect(tableJobs(io.mem.primResp.get, leaf = true), io.mem.primResp.get, Some(true))._2)
-    else (collect(jobQs(0).io.deq, io.mem.resp, Some(false))._1, collect(jobQs(1).io.deq, io.mem.primResp.get, Some(true))._2)
+    if (!p.respByPath) collect(jobQs(0).io.deq, resp, None)
+    else if (p.respTagged) (collect(tableJobs(resp, leaf = false), resp, Some(false))._1,
+      collect(tableJobs(primResp, leaf = true), primResp, Some(true))._2)
+    else (collect(jobQs(0).io.deq, resp, Some(false))._1, collect(jobQs(1).io.deq, primResp, Some(true))._2)
 
   // with PIPELINE a node's and a primitive's job pass a register into their pipe: the MC's response mux and the
   // words' assembly then end there, and the pipes' first stages start from it (a cycle more per access, which the

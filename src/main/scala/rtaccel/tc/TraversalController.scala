@@ -102,7 +102,8 @@ class TraversalController(p: PlatformParams) extends Module {
 
   // Results: round-robin over TUs, with host backpressure.
   val arb = Module(new rtaccel.arb.TreeArbiter(new TuResult, p.tus, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, p.tus), withChosen = false,
-    heldInputs = p.stageBudget.isDefined)) // a TU holds its result until taken: registered grants at the leaves
+    heldInputs = p.stageBudget.isDefined, grantsEverywhere = p.stageBudget.isDefined)) // a TU holds its result until
+  // taken, and a result comes every few hundred cycles per TU: registered grants at every level
   arb.io.in <> io.tuResult
   io.out <> arb.io.out
 }

@@ -11,9 +11,11 @@ import scala.util.Random
   * leaves) a request is never taken in the cycle it is first offered: its ready does not depend on its valid.
   */
 class TreeArbiterSpec extends AnyFunSuite with ChiselScalatestTester {
-  for ((n, fanIn, held) <- Seq((32, 4, false), (5, 2, false), (7, 8, false), (32, 4, true), (5, 2, true), (3, 4, true)))
-    test(s"$n requesters, fan-in $fanIn${if (held) ", registered grants" else ""}: each request once, chosen = its requester, none starved, full rate") {
-      test(new TreeArbiter(UInt(16.W), n, fanIn, heldInputs = held)) { dut =>
+  for ((n, fanIn, held, everywhere) <- Seq((32, 4, false, false), (5, 2, false, false), (7, 8, false, false), (32, 4, true, false),
+      (5, 2, true, false), (3, 4, true, false), (32, 4, true, true), (5, 2, true, true)))
+    test(s"$n requesters, fan-in $fanIn${if (everywhere) ", registered grants at every level" else if (held) ", registered grants" else ""}: " +
+        "each request once, chosen = its requester, none starved, full rate") {
+      test(new TreeArbiter(UInt(16.W), n, fanIn, heldInputs = held, grantsEverywhere = everywhere)) { dut =>
         val rnd = new Random(n * 31 + fanIn)
         val next = Array.fill(n)(0) // the sequence number each requester offers next
         val offering = Array.fill(n)(false)
