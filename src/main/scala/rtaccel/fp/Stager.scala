@@ -130,15 +130,22 @@ object Stager {
     */
   def ramDelay[T <: Data](x: T, n: Int, row: UInt): T = {
     require(n >= 2, s"a delay in LUT RAM takes at least 2 cycles (got $n)")
-    val ring = Mem(n - 1, chiselTypeOf(x)).suggestName("delay")
-    val out = RegNext(ring(row)) // written n - 1 cycles ago
+    val ring = Mem(ramRows(n), chiselTypeOf(x)).suggestName("delay")
+    // From 3 cycles on, two registers after the read: synthesis folds the first into the read port and, where LUT
+    // RAM reads asynchronously (ECP5), moves it onto the read address, so the second is what keeps the ring's
+    // output from running into the logic that reads it (TriPipe's routed critical path on ECP5: a ring's read
+    // through an adder's carry chain, 7.26 ns).
+    val out = if (n >= 3) RegNext(RegNext(ring(row))) else RegNext(ring(row)) // written ramRows(n) cycles ago
     ring(row) := x
     out
   }
-  /** The row of a ring of n - 1 rows: counts 0 .. n - 2 and wraps, from reset. */
+  /** Rows of the ring of an n-cycle delay: n less its registers after the read. */
+  def ramRows(n: Int): Int = if (n >= 3) n - 2 else n - 1
+  /** The row of the ring of an n-cycle delay (ramRows(n) rows): counts 0 .. ramRows(n) - 1 and wraps, from reset. */
   def ringRow(n: Int): UInt = {
-    val row = RegInit(0.U(log2Ceil(n - 1).max(1).W))
-    row := Mux(row === (n - 2).U, 0.U, row + 1.U)
+    val rows = ramRows(n)
+    val row = RegInit(0.U(log2Ceil(rows).max(1).W))
+    row := (if (rows == 1) 0.U else Mux(row === (rows - 1).U, 0.U, row + 1.U))
     row
   }
   /** No register inside an operator: the combinational operators of [[Fp]]. */
