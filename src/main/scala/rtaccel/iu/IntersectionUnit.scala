@@ -147,9 +147,9 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
       when(unitDone && isLeaf) { primIdx := Mux(jobDone, 0.U, primIdx + 1.U) }
     }
     jobs.ready := jobDone
-    // RESP_ORDER=path: nothing else reads a stream's `last` (the request-order MC's mux does), so check here that
-    // it agrees with the size of the job this collection counted
-    if (only.isDefined) when(beatFire) { assert(beats.bits.last === jobDone, "IntersectionUnit: a response's last beat disagrees with its job's size") }
+    // a response's `last` must agree with the size of the job this collection counted (RESP_ORDER=path: nothing else
+    // reads it; in request order the MC's mux does, and the IU's register slice on the responses carries it here)
+    when(beatFire) { assert(beats.bits.last === jobDone, "IntersectionUnit: a response's last beat disagrees with its job's size") }
 
     val node = Wire(new NodeJob(p))
     node.tu := job.tu
