@@ -44,9 +44,8 @@ class TreeArbiter[T <: Data](gen: T, val n: Int, val fanIn: Int, withChosen: Boo
       s.io.deq
     }.toSeq
   private def arbitrate(g: Seq[DecoupledIO[Tagged]], leaves: Boolean): DecoupledIO[Tagged] =
-    if (leaves && heldInputs) fed(Module(new GrantArbiter(new Tagged, g.length)).io, g)
+    if (leaves && heldInputs || grantsEverywhere && g.length > 1) fed(Module(new GrantArbiter(new Tagged, g.length)).io, g)
     else if (g.length == 1) g.head
-    else if (grantsEverywhere) fed(Module(new GrantArbiter(new Tagged, g.length)).io, g)
     else fed(Module(new RRArbiter(new Tagged, g.length)).io, g)
   /** An arbiter's output, its inputs driven by g. */
   private def fed(a: ArbiterIO[Tagged], g: Seq[DecoupledIO[Tagged]]): DecoupledIO[Tagged] = {

@@ -4,7 +4,8 @@ import chisel3._
 import chisel3.util._
 
 /** An unsigned product of up to 18 x 18 bits with its operands and its result in registers: two cycles, and no fabric
-  * logic between the registers (`DspTile.apply` puts a third, in the fabric, in front). Where the family's DSP block has such registers of its own (DspShape.registered:
+  * logic between the registers (`DspTile.apply` puts a third, in the fabric, in front). Where the family's DSP block
+  * has such registers of its own (DspShape.registered:
   * ECP5's MULT18X18D with REG_INPUTA/B and REG_OUTPUT on CLK0), synthesis gets the block with them, so neither the
   * block's multiply nor its routes share a stage with fabric logic (an unregistered MULT18X18D alone is 8.57 ns on
   * the LFE5UM5G -8, docs/timing.md), and the registers cost no flip-flops. Simulators get the same registers in

@@ -145,7 +145,7 @@ object Stager {
   def ringRow(n: Int): UInt = {
     val rows = ramRows(n)
     val row = RegInit(0.U(log2Ceil(rows).max(1).W))
-    row := (if (rows == 1) 0.U else Mux(row === (rows - 1).U, 0.U, row + 1.U))
+    row := Mux(row === (rows - 1).U, 0.U, row + 1.U)
     row
   }
   /** No register inside an operator: the combinational operators of [[Fp]]. */
