@@ -1,5 +1,7 @@
 # rtaccel — every entry point. `make run` and `make test` install what they need on a fresh machine.
-SHELL := /bin/bash
+# under ./rtaccel (RTACCEL_STATUS set) recipes run through tools/recipe-shell, which records a failing line's own
+# exit status: make reports any failed recipe as 2
+SHELL := $(if $(RTACCEL_STATUS),$(abspath tools/recipe-shell),/bin/bash)
 .DEFAULT_GOAL := help
 
 ROOT      := $(abspath .)
@@ -363,9 +365,9 @@ $(FIXTURES): $(wildcard scenes/*.py golden/*.py) | venv
 test: deps yosys z3 fixtures
 	@rm -rf build/test-reports; mkdir -p build/test-reports/python
 	@rc=0; \
-	RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=1; \
+	RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=3; \
 	RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
-	  $(PY) -m pytest -q --junitxml=build/test-reports/python/pytest.xml || rc=1; \
+	  $(PY) -m pytest -q --junitxml=build/test-reports/python/pytest.xml || rc=3; \
 	$(PY) tools/count_tests.py build/test-reports; exit $$rc
 
 clean:
