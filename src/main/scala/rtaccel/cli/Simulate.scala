@@ -111,15 +111,16 @@ object Simulate {
   /** RTL against the model, ray by ray: raw bits of every field, and each fault flag against the model's record. */
   final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int)
 
-  private def compare(rtl: RtlHits, model: Hits): Comparison = {
+  private def compare(rtl: RtlHits, model: Hits, flags: RayStats): Comparison = {
     def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
     val h = rtl.hits; val got = rtl.seen.indices.filter(rtl.seen(_) >= 1)
     Comparison(
       mismatch = got.count(i => h.prim(i) != model.prim(i) || bits(h.t(i)) != bits(model.t(i)) ||
         bits(h.u(i)) != bits(model.u(i)) || bits(h.v(i)) != bits(model.v(i))),
       lost = rtl.seen.count(_ == 0),
-      overflowDisagree = got.count(i => rtl.overflow(i) != (model.prim(i) == Hits.Overflow)),
-      readErrorDisagree = got.count(i => rtl.readError(i) != (model.prim(i) == Hits.ReadError)))
+      // each flag against the model's own flag: a ray that overflowed and read an error carries both
+      overflowDisagree = got.count(i => rtl.overflow(i) != flags.overflowRays(i)),
+      readErrorDisagree = got.count(i => rtl.readError(i) != flags.readErrorRays(i)))
   }
 
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
@@ -222,7 +223,7 @@ object Simulate {
       val rtl = readHits(dut, received, rays.count)
       val hits = rtl.hits
       val tHits = System.nanoTime()
-      val cmp = compare(rtl, model)
+      val cmp = compare(rtl, model, stats)
       import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree}
       val (rtlOverflow, rtlReadError) = (rtl.overflow, rtl.readError)
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)

@@ -7,6 +7,8 @@ import rtaccel.scene.{Hits, Rays}
 final class RayStats {
   var nodeFetches = 0L; var leafFetches = 0L; var primTests = 0L; var boxTests = 0L
   var maxStack = 0; var overflows = 0; var readErrors = 0; var restarts = 0L
+  // which rays carry each fault flag: a ray can carry both, and its record then shows only the read error
+  val overflowRays = scala.collection.mutable.BitSet(); val readErrorRays = scala.collection.mutable.BitSet()
   var primBytes = 0L // DRAM bytes of the leaves fetched (PlatformParams.leafBytes)
 }
 
@@ -196,8 +198,8 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private def record(i: Int, out: Hits, st: RayStats, tmax: Float, overflowed: Boolean, readError: Boolean): Unit = {
     st.nodeFetches += nodeFetches; st.leafFetches += leafFetches; st.primTests += primTests; st.boxTests += boxTests; st.primBytes += primBytes
     if (maxStack > st.maxStack) st.maxStack = maxStack
-    if (overflowed) st.overflows += 1
-    if (readError) st.readErrors += 1
+    if (overflowed) { st.overflows += 1; st.overflowRays += i }
+    if (readError) { st.readErrors += 1; st.readErrorRays += i }
     if (readError || overflowed) {
       out.t(i) = Float.PositiveInfinity; out.prim(i) = if (readError) Hits.ReadError else Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f
     }

@@ -3,7 +3,6 @@ package rtaccel.iu
 import chisel3._
 import chisel3.util.Valid
 import chiseltest._
-import chiseltest.simulator.VerilatorBackendAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.util.Random
 import rtaccel.config.{PlatformParams, Pipelining, TriTest}
@@ -56,7 +55,7 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}, PIPELINE=${pl.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
     val pb = p.copy(boxFormat = bf, triTest = tt, pipelining = pl)
     val outward = if (bf == FpFormat.fp32) None else Some(new RayBoxOutward(bf, pb.boxSlackUlps))
-    test(new BoxPipe(pb)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+    test(new BoxPipe(pb)).withAnnotations(rtaccel.TestSim.quick) { dut =>
       val lat = dut.latency
       if (pl == fixed) assert(lat == 4, s"PIPELINE=none keeps the four stages (latency $lat)")
       else assert(lat > 4, s"PIPELINE=${pl.name} adds registers (latency $lat)")
@@ -119,7 +118,7 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
                                       model: (PreparedRay, Float, Array[Float], RayTriangle.Result) => Boolean, ties: Boolean,
                                       wide: Boolean = false, annos: Seq[firrtl2.annotations.Annotation] = Nil): Unit =
     test(s"$name == its model on $n random and degenerate primitives, one per cycle") {
-      test(pipe).withAnnotations(Seq(VerilatorBackendAnnotation) ++ annos) { dut =>
+      test(pipe).withAnnotations(rtaccel.TestSim.quick ++ annos) { dut =>
         val (in, outIo) = io(dut)
         val lat = latency(dut)
         info(s"latency $lat cycles")

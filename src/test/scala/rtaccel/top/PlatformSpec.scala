@@ -83,33 +83,40 @@ class PlatformSpec extends AnyFunSuite {
 
   // Caches (docs/caches.md): whole scene bit-exact, counts equal the model on the logged order, and no stale
   // line under random DRAM latency and host backpressure (a wrong beat would change a hit).
-  private val cacheCases = Seq(
+  // make test: these caches under jitter and backpressure in the short-stack case's circuit
+  private val cacheCases = if (!full) Nil else Seq(
     ("LRP 2-way node cache (MAX_LEVEL 3) + 2-way LRU primitive cache, jitter + backpressure", 8,
-      CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 37, 40)) ++ (if (!full) Nil else Seq(
+      CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 37, 40),
     ("direct-mapped node + primitive caches", 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 1, CachePolicy.Dm), 0, 0),
     ("hybrid node cache (MAX_LEVEL 2) + PLRU 4-way primitive cache, jitter + backpressure", 4,
       CacheParams(64, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(64, 4, CachePolicy.Plru), 23, 30),
-    ("breadth-first static node buffer (preloaded)", 2, CacheParams(16, 1, CachePolicy.Bf), CacheParams(), 11, 0)))
+    ("breadth-first static node buffer (preloaded)", 2, CacheParams(16, 1, CachePolicy.Bf), CacheParams(), 11, 0))
   for ((what, tus, node, prim, jitter, stall) <- cacheCases)
     test(s"caches, bit-exact and counting like the model: $what") {
       runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim)
     }
 
-  test("a stack too small for the scene: the RTL flags exactly the model's overflowed rays, bit for bit") {
-    val j = runOne(2, 8, 1, rays, scene, stack = 2).json
-    info(s"${j("overflowed").num.toInt} of ${rays.count} rays overflowed a 2-entry stack")
+  private def someOverflowed(j: ujson.Value, stack: Int): Unit = {
+    info(s"${j("overflowed").num.toInt} of ${rays.count} rays overflowed a $stack-entry stack")
     assert(j("model_overflowed").num > 0 && j("model_overflowed").num < rays.count, "the test stack must overflow some rays, not all")
+  }
+  // make test: in the read errors' circuit below (both kinds of flagged ray in one run)
+  if (full) test("a stack too small for the scene: the RTL flags exactly the model's overflowed rays, bit for bit") {
+    someOverflowed(runOne(2, 8, 1, rays, scene, stack = 2).json, 2)
   }
 
   // Memory read errors (poisoned beats, the same set in the DRAM model and the model): exactly the rays that
   // read one are flagged prim -2, every other ray stays bit-exact; through caches, the poison stays cached.
-  for ((what, tus, node, prim) <- Seq(("DM node + 2-way LRU primitive caches", 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 2, CachePolicy.Lru))) ++
-      (if (full) Seq(("no cache", 4, CacheParams(), CacheParams())) else Nil))
-    test(s"memory read errors flag exactly the affected rays, the rest bit-exact: $what") {
+  // make test: with a 3-entry stack, so that the overflowed rays (prim -3) are flagged in the same run.
+  private val smallStack = 3
+  for ((what, tus, node, prim, stack) <- Seq(("DM node + 2-way LRU primitive caches", 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 2, CachePolicy.Lru), if (full) 64 else smallStack)) ++
+      (if (full) Seq(("no cache", 4, CacheParams(), CacheParams(), 64)) else Nil))
+    test(s"memory read errors flag exactly the affected rays, the rest bit-exact: $what${if (stack < 64) s"; a $stack-entry stack overflows exactly the model's rays" else ""}") {
       // a seed whose poison spares the root node (a poisoned root fails every ray, which tests less)
       val rate = 0.003
       val seed = (1 to 1000).find(s => !MemFaults(MemFaults.threshold(rate), s, 32, 128, 0, 64).nodeBad(0)).get
-      val j = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = rate, seed = seed).json
+      val j = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = rate, seed = seed, stack = stack).json
+      if (stack < 64) someOverflowed(j, stack)
       info(f"${j("read_errors").num}%.0f of ${rays.count} rays read a poisoned beat (${j("mem_error_beats").num}%.0f error beats)")
       assert(j("model_read_errors").num > 0 && j("model_read_errors").num < rays.count, "the rate must hit some rays, not all")
       assert(j("mem_error_beats").num > 0 && j("mem_error_beats").num == j("counters")("mem_read_errors").num)
@@ -117,10 +124,11 @@ class PlatformSpec extends AnyFunSuite {
 
   // Short stack with restart in the TUs: the RTL's fetches (counted and replayed through the caches) and hits
   // equal model.traceShort's, and its hits the full stack's.
-  for ((tus, ring, node, prim, jitter) <- Seq((8, 1, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(), 29)) ++
-      (if (full) Seq((1, 2, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 0)) else Nil))
-    test(s"short stack of $ring with restart at $tus TU(s) with caches: bit-exact, counts equal the model, hits equal the full stack's") {
-      val sh = runOne(tus, 4, 4, rays, scene, jitter, node = node, prim = prim, short = ring); val j = sh.json
+  // make test: the LRP node and LRU primitive caches under jitter and backpressure in the same circuit
+  for ((tus, ring, node, prim, jitter, stall) <- Seq((8, 1, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 37, 40)) ++
+      (if (full) Seq((1, 2, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 0, 0)) else Nil))
+    test(s"short stack of $ring with restart at $tus TU(s) with caches (node ${node.entries} ${node.policy}, prim ${prim.entries} ${prim.policy}, jitter $jitter, stall $stall): bit-exact, counts equal the model, hits equal the full stack's") {
+      val sh = runOne(tus, 4, 4, rays, scene, jitter, stall, node = node, prim = prim, short = ring); val j = sh.json
       // the full stack's side from the model alone (RTL == model is what runOne checks)
       val (fo, fullNodes) = modelRun(Presets.paper2017.copy(tus = tus)) // caches change no fetch of the model
       def bits(h: rtaccel.scene.Hits, i: Int) = Seq(h.t(i), h.u(i), h.v(i)).map(java.lang.Float.floatToRawIntBits) :+ h.prim(i)
@@ -260,11 +268,10 @@ class PlatformSpec extends AnyFunSuite {
   // RESP_ORDER=path and tagged (docs/platform.md): node and leaf responses in two streams (tagged: each in any
   // order, hits under misses); bit-exact, and the caches' counts still equal the model replaying the RTL's own
   // order. make test: IUS=2 over MEM_CHANNELS=2 with caches under jitter and backpressure for path (the clusters and
-  // channels case of make test too), IUS=1 with both caches for tagged.
+  // channels case of make test too); tagged in the RAY_STORE and NODE_BANKS cases below.
   private val (path, tagged) = (RespOrder.Path, RespOrder.Tagged)
-  private val pathCases = Seq((path, 2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
-    (tagged, 1, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30)) ++
-    (if (!full) Nil else Seq((path, 1, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
+  private val pathCases = Seq((path, 2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
+    (if (!full) Nil else Seq((tagged, 1, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30),(path, 1, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
       (path, 2, 1, 4, CacheParams(), CacheParams(), 0, 0), (tagged, 1, 1, 4, CacheParams(), CacheParams(), 17, 20),
       (tagged, 2, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25),
       (tagged, 1, 1, 8, CacheParams(32, 1, CachePolicy.Hybrid), CacheParams(16, 4, CachePolicy.Plru), 0, 0)))
