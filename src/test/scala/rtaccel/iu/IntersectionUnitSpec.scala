@@ -3,7 +3,6 @@ package rtaccel.iu
 import chisel3._
 import chiseltest._
 import chiseltest.internal.CachingAnnotation
-import chiseltest.simulator.{VerilatorBackendAnnotation, VerilatorCFlags}
 import firrtl2.options.TargetDirAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.collection.mutable
@@ -38,8 +37,8 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   // Verilator: M box tests and a Möller–Trumbore pipeline with a divider are far too slow in treadle.
   private def sim(p: PlatformParams, beatBits: Int) = {
     val r = p.refs
-    Seq(VerilatorBackendAnnotation, VerilatorCFlags(Seq("-O1")), CachingAnnotation, TargetDirAnnotation(
-      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}${if (p.respByPath) s"-r${p.respOrder}" else ""}"))
+    rtaccel.TestSim.quick ++ Seq(CachingAnnotation, TargetDirAnnotation(
+      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}${if (p.respByPath) s"-r${p.respOrder}" else ""}-o0"))
   }
 
   private def soupImage(seed: Long, p0: PlatformParams, fit: Boolean): MemoryImage = {

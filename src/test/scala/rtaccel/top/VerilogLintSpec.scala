@@ -19,15 +19,13 @@ class VerilogLintSpec extends AnyFunSuite {
       ("paper2017", 4, 8, "--node-cache 8192 --prim-cache 1024 --prim-ways 2"),
       // (with one lookup per cycle: write-first tag RAMs in both of the hybrid's arrays and the PLRU's)
       ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru --tag-forward 1"),
-      ("small", 4, 2, "--box-format bf16 --tri-test watertight --node-format q8 --node-cache 64 --prim-format packed --prim-cache 64 --prim-ways 2 --short-stack 4"),
+      // (and two response streams, with the packed leaves' LeafAssembler on the leaf stream)
+      ("small", 4, 2, "--box-format bf16 --tri-test watertight --node-format q8 --node-cache 64 --prim-format packed --prim-cache 64 --prim-ways 2 --short-stack 4 --resp-order path"),
       ("small", 4, 4, "--ius 4 --mem-channels 2 --node-cache 64 --prim-cache 64 --prim-ways 2"), // IU clusters of one TU each over 2 channels
-      // two response streams, with the packed leaves' LeafAssembler on the leaf stream
-      ("small", 4, 2, "--resp-order path --node-cache 64 --prim-format packed --prim-cache 64"),
       // tagged answers: clean hits beside the tickets in both caches, the IU's job tables, and the ray stores of
-      // two clusters (the TC's writes routed by cluster)
-      ("small", 4, 4, "--resp-order tagged --ray-store 1 --ius 2 --node-cache 64 --prim-cache 64 --prim-ways 2"),
-      // NODE_BANKS: one node cache in 4 banks for 2 clusters (both crossbars wider than one), one lookup per cycle
-      ("small", 4, 4, "--resp-order tagged --ius 2 --node-banks 4 --tag-forward 1 --node-cache 64 --node-ways 2 --prim-cache 64")) ++
+      // two clusters (the TC's writes routed by cluster); NODE_BANKS: one node cache in 4 banks for the 2 clusters
+      // (both crossbars wider than one), one lookup per cycle
+      ("small", 4, 4, "--resp-order tagged --ray-store 1 --ius 2 --node-banks 4 --tag-forward 1 --node-cache 64 --node-ways 2 --prim-cache 64 --prim-ways 2")) ++
     (if (!regress) Nil else Seq(("small", 2, 1, ""), ("paper2017-lrp", 8, 2, ""), ("small", 4, 1, "--node-cache 64 --node-policy bf"),
       ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
       ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight"),
@@ -35,6 +33,8 @@ class VerilogLintSpec extends AnyFunSuite {
       ("small", 4, 2, "--node-format q8 --node-cache 64"),
       ("paper2017", 4, 32, "--ius 2 --node-cache 1024"), ("paper2017", 4, 4, "--resp-order path"), ("paper2017", 4, 8, "--resp-order tagged --node-cache 0"),
       ("paper2017", 4, 32, "--ray-store 1"), // the request-order job FIFO without rays
+      ("small", 4, 2, "--resp-order path --node-cache 64 --prim-format packed --prim-cache 64"),
+      ("small", 4, 4, "--resp-order tagged --ray-store 1 --ius 2 --node-cache 64 --prim-cache 64 --prim-ways 2"),
       ("small", 4, 2, "--tri-format fp64"))) // the widened Möller–Trumbore pipe: a large circuit to lint
   for ((cfg, m, tus, caches) <- cases)
     test(s"$cfg with M=$m, TUs=$tus${if (caches.isEmpty) "" else s", caches $caches"} emits SystemVerilog that is lint clean") {
