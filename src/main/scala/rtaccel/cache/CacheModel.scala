@@ -47,8 +47,8 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
   private val isHybrid = c.policy == CachePolicy.Hybrid
 
   // hybrid side cache (LRP)
-  val sideLines: Int = if (isHybrid) math.max(1, lines / 8) else 0
-  val sideWays: Int = if (isHybrid) math.min(4, sideLines) else 0
+  val sideLines: Int = c.sideLines(lines)
+  val sideWays: Int = c.sideWays(lines)
   private val side: ReplacementPolicy = if (isHybrid) Policies.of(CachePolicy.Lru, sideWays) else null
   private val sideSets = if (isHybrid) sideLines / sideWays else 0
   require(!isHybrid || sideSets % banks == 0, s"$banks banks must divide the hybrid side array's $sideSets sets")

@@ -34,11 +34,13 @@ import rtaccel.config.PlatformParams
   * Measured against the RTL and against an event simulation of the same in-order network in docs/dse.md
   * ("The speed-for-accuracy ladder").
   *
-  * `p.hw.cachePathCycles` is the extra latency of an access through a cache path (tag lookup, ticket queue, data
+  * `cachePathCycles` (default CachePathCycles) is the extra latency of an access through a cache path (tag lookup, ticket queue, data
   * RAM, output queue), measured on the RTL at one TU (docs/caches.md: 7.5-8.8 cycles per access on sponza and
   * conference); an uncached path adds none (measured -1..0).
   */
 object Throughput {
+  /** A model constant, measured (see above), not a size of the hardware. */
+  val CachePathCycles: Double = 8.0
 
   /** raysPerCycle: with head-of-line blocking and the outstanding limit; raysPerCycleNoHol: the plain MVA of
     * TUs rays (the model before head-of-line blocking, kept to show what the in-order stream costs). */
@@ -109,7 +111,8 @@ object Throughput {
   def mvaInOrder(delay: Double, dram: Double, port: Double, s: InOrder, n: Int): (Double, Double) =
     mvaInOrder(delay, dram, Seq(port), Seq(s), n)
 
-  def predict(p: PlatformParams, s: SinkCounts, rays: Int, tus: Int): Prediction = {
+  def predict(p: PlatformParams, s: SinkCounts, rays: Int, tus: Int, cachePathCycles: Double = CachePathCycles): Prediction = {
+    require(cachePathCycles >= 0, s"cache path cycles cannot be negative (got $cachePathCycles)")
     val n = math.max(1, rays).toDouble
     val bpc = p.memBytesPerSecondTotal / p.cyclesPerSecond // all channels (address-interleaved)
     val beatBytes = p.axiDataBits / 8.0
@@ -119,7 +122,6 @@ object Throughput {
     val nodeHitBytes = (s.nodeAccesses * p.nodeAccessBytes - s.nodeDramBytes).toDouble
     val primHitBytes = (s.primBytesAll - s.primDramBytes).toDouble
     val hitBytes = nodeHitBytes + primHitBytes
-    val cachePathCycles = p.hw.cachePathCycles
     val nodeOverhead = s.nodeCache.fold(0.0)(_ => cachePathCycles) * s.nodeAccesses
     val primOverhead = s.primCache.fold(0.0)(_ => cachePathCycles) * s.leafAccesses
     // PIPELINE's registers lengthen every node and leaf test, and its slices every access (the fit above is of the

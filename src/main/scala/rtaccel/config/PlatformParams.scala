@@ -30,6 +30,16 @@ final case class CacheParams(entries: Int = 0, ways: Int = 1, policy: CachePolic
   require(entries == 0 || Integer.bitCount(entries) == 1, s"cache entries must be a power of two (got $entries)")
   require(ways >= 1 && (entries == 0 || entries % ways == 0), s"cache ways ($ways) must divide entries ($entries)")
   require(maxLevel >= 0, s"MAX_LEVEL must be >= 0 (got $maxLevel)")
+  /** hybrid: lines of the LRP side cache beside a direct-mapped array of `lines` lines (an eighth, at least one);
+    * the trace model, the RTL and the bank check all size it here */
+  def sideLines(lines: Int): Int = if (policy == CachePolicy.Hybrid) math.max(1, lines / CacheParams.HybridSideShare) else 0
+  /** hybrid: the side cache's ways (true LRU, at most HybridSideWays) */
+  def sideWays(lines: Int): Int = math.min(CacheParams.HybridSideWays, sideLines(lines))
+}
+
+object CacheParams {
+  val HybridSideShare = 8 // the side cache holds 1/8 of the direct-mapped array's lines
+  val HybridSideWays = 4
 }
 
 /** RESP_ORDER: the order in which the MC answers (PlatformParams.respByPath, respTagged). */
@@ -47,7 +57,8 @@ object RespOrder {
 }
 
 /** Fixed sizes of the hardware that no scene changes: bus widths, outstanding-request limits, queue depths,
-  * the level code of the level replacement policy, and the cache-path latency the throughput model assumes.
+  * the level code of the level replacement policy, the MC's counter width and the replacement state the RTL
+  * tabulates (the throughput model's own constants live with it, in cache/Throughput).
   * Each is checked here; a sweep may copy(...) them like any knob.
   */
 final case class HwLimits(
@@ -61,7 +72,8 @@ final case class HwLimits(
   cacheHitQueue: Int = 4,     // RESP_ORDER=tagged: hits a cache path holds for its data RAM beside the misses' tickets
   dramQueueDepth: Int = 16,   // AR requests the simulated DRAM queues
   levelCodeBits: Int = 4,     // paper Section 7.2: node levels 0..14, 15 = 15 and deeper
-  cachePathCycles: Double = 8.0, // Throughput: extra cycles per access through a cache path (docs/caches.md)
+  mcCounterBits: Int = 48,
+  policyStateBits: Int = 10,  // replacement state per set the RTL tabulates (2^bits rows: true LRU to 4 ways, PLRU to 8)    // the MC's and its caches' event counters (never cleared by traffic: 2^48 events)
   // MEM_CHANNELS > 1: bytes of one channel's address block (channel = (addr / this) mod channels); a burst never
   // crosses 4 KB (BurstSplitter), so a block of 4 KB or more keeps every burst in one channel
   channelInterleaveBytes: Int = 4096
@@ -77,8 +89,9 @@ final case class HwLimits(
   require(cacheOutQueue >= 3 && cacheOutQueue <= 64, s"cache output queue must be 3..64 beats (got $cacheOutQueue): the data RAM pipeline keeps up to 3 beats in flight")
   require(cacheHitQueue >= 1 && cacheHitQueue <= 64, s"cache hit queue must be 1..64 (got $cacheHitQueue)")
   require(dramQueueDepth >= 1 && dramQueueDepth <= 256, s"DRAM queue depth must be 1..256 (got $dramQueueDepth)")
+  require(policyStateBits >= 1 && policyStateBits <= 12, s"policy state must be 1..12 bits (got $policyStateBits): the RTL tabulates 2^bits rows per policy function")
+  require(mcCounterBits >= 32 && mcCounterBits <= 64, s"MC counters must be 32..64 bits (got $mcCounterBits): the register map reads them as LO/HI words")
   require(levelCodeBits >= 1 && levelCodeBits <= 6, s"level code must be 1..6 bits (got $levelCodeBits); the RTL tabulates 2^bits x 2^bits classes")
-  require(cachePathCycles >= 0, s"cache path cycles cannot be negative (got $cachePathCycles)")
   /** the highest level code: levels at or beyond it share it */
   val maxLevelCode: Int = (1 << levelCodeBits) - 1
 }
@@ -183,9 +196,9 @@ final case class PlatformParams(
     require(sets % nodeBanks == 0,
       s"NODE_BANKS=$nodeBanks must divide the node cache's $sets sets (NODE_CACHE=${nodeCache.entries} / NODE_WAYS=${nodeCache.ways}); use fewer banks or more entries")
     if (nodeCache.policy == CachePolicy.Hybrid) {
-      val side = math.max(1, nodeCache.entries / 8); val sideSets = side / math.min(4, side)
+      val sideSets = nodeCache.sideLines(nodeCache.entries) / nodeCache.sideWays(nodeCache.entries)
       require(sideSets % nodeBanks == 0,
-        s"NODE_BANKS=$nodeBanks must divide the hybrid side array's $sideSets sets (NODE_CACHE=${nodeCache.entries} / 32); use fewer banks or more entries")
+        s"NODE_BANKS=$nodeBanks must divide the hybrid side array's $sideSets sets (NODE_CACHE=${nodeCache.entries} / ${CacheParams.HybridSideShare * CacheParams.HybridSideWays}); use fewer banks or more entries")
     }
   }
 

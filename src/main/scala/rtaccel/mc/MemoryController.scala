@@ -43,32 +43,33 @@ class PathReq(addrBits: Int, beatsBits: Int, levelBits: Int, tagBits: Int = 0) e
 }
 
 /** Hit/miss counters a path reports (all zero for the pass-through). */
-class PathStats extends Bundle {
-  val hits = UInt(48.W)
-  val misses = UInt(48.W)
-  val bypasses = UInt(48.W)
+class PathStats(bits: Int) extends Bundle {
+  val hits = UInt(bits.W)
+  val misses = UInt(bits.W)
+  val bypasses = UInt(bits.W)
 }
 
-/** What the MC counts (48-bit, never cleared): requests by kind, primitives and bytes requested, R beats
-  * received (DRAM busy), and each path's cache statistics.
+/** What the MC counts (HwLimits.mcCounterBits each, never cleared by traffic): requests by kind, primitives and
+  * bytes requested, R beats received (DRAM busy), and each path's cache statistics.
   */
-class McCounters extends Bundle {
-  val nodeRequests = UInt(48.W)
-  val leafRequests = UInt(48.W)
-  val primsRequested = UInt(48.W)
-  val bytesRequested = UInt(48.W)
-  val busyBeats = UInt(48.W)
-  val readErrors = UInt(48.W)
-  val nodeCache = new PathStats
-  val primCache = new PathStats
+class McCounters(val bits: Int) extends Bundle {
+  val nodeRequests = UInt(bits.W)
+  val leafRequests = UInt(bits.W)
+  val primsRequested = UInt(bits.W)
+  val bytesRequested = UInt(bits.W)
+  val busyBeats = UInt(bits.W)
+  val readErrors = UInt(bits.W)
+  val nodeCache = new PathStats(bits)
+  val primCache = new PathStats(bits)
 }
 
 object McCounters {
-  /** The field-by-field sum of several MCs' counters (IUS > 1: one MC per IU cluster); every field is 48 bits. */
+  /** The field-by-field sum of several MCs' counters (IUS > 1: one MC per IU cluster); every field has `bits`. */
   def sum(cs: Seq[McCounters]): McCounters = if (cs.length == 1) cs.head else {
-    val k = (new McCounters).getWidth / 48
-    val vs = cs.map(_.asTypeOf(Vec(k, UInt(48.W))))
-    VecInit(Seq.tabulate(k)(i => vs.map(_(i)).reduce(_ + _))).asTypeOf(new McCounters)
+    val w = cs.head.bits
+    val k = (new McCounters(w)).getWidth / w
+    val vs = cs.map(_.asTypeOf(Vec(k, UInt(w.W))))
+    VecInit(Seq.tabulate(k)(i => vs.map(_(i)).reduce(_ + _))).asTypeOf(new McCounters(w))
   }
 }
 
@@ -108,7 +109,7 @@ class FetchPathIO(g: McGeometry) extends Bundle {
   val primBase = Input(UInt(g.axi.addrBits.W))
   val maxLevel = Input(UInt(g.p.hw.levelCodeBits.W))
   val clearStats = Input(Bool()) // the host's CLEAR_COUNTERS
-  val stats = Output(new PathStats)
+  val stats = Output(new PathStats(g.p.hw.mcCounterBits))
   val memReq = Decoupled(g.memReq)
   val memResp = Flipped(Decoupled(new FetchBeat(g.axi.dataBits)))
   val out = Decoupled(g.respBeat)
@@ -141,7 +142,7 @@ class FetchPath(g: McGeometry) extends FetchPathModule(g) {
     t.io.deq.ready := io.memResp.fire && io.memResp.bits.last
     when(io.memResp.valid) { assert(t.io.deq.valid, "FetchPath: a DRAM beat with no tagged request outstanding") }
   }
-  io.stats := 0.U.asTypeOf(new PathStats)
+  io.stats := 0.U.asTypeOf(io.stats)
 }
 
 object FetchPath {
@@ -238,7 +239,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     val maxLevel = Input(UInt(p.hw.levelCodeBits.W)) // MAX_LEVEL register of the level replacement policy
     val clearCounters = Input(Bool()) // zeroes the counters below and every path's cache statistics
     val axi = new AxiReadMaster(ap)
-    val counters = Output(new McCounters)
+    val counters = Output(new McCounters(p.hw.mcCounterBits))
   })
   val f = p.refs
   // the two streams drain independently, so an R beat for a stream that waits must have room to land
@@ -375,7 +376,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
 
   // ---- counters
   def counter(inc: UInt, en: Bool): UInt = {
-    val c = RegInit(0.U(48.W))
+    val c = RegInit(0.U(p.hw.mcCounterBits.W))
     when(io.clearCounters) { c := 0.U }.elsewhen(en) { c := c + inc }
     c
   }

@@ -51,7 +51,7 @@ class PolicyTablesSpec extends AnyFlatSpec with ChiselScalatestTester {
     }
   }
   it should "refuse state it cannot tabulate, saying what to change" in {
-    val e = intercept[IllegalArgumentException](PolicyTables.check(Policies.of(CachePolicy.Lru, 8)))
+    val e = intercept[IllegalArgumentException](PolicyTables.check(Policies.of(CachePolicy.Lru, 8), rtaccel.config.HwLimits().policyStateBits))
     assert(e.getMessage.contains("fewer ways"))
   }
 }

@@ -44,7 +44,7 @@ class ThroughputSpec extends AnyFunSuite {
     // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:
     // (2 x 232 - 2 x 72 + 2 x 4 + 4 x path) / 2, by hand for two path latencies
     for ((path, expect) <- Seq(8.0 -> 180.0, 5.0 -> 174.0)) {
-      val c = Throughput.predict(p.copy(hw = HwLimits(cachePathCycles = path)), sink(cached = true), rays = 2, tus = 1)
+      val c = Throughput.predict(p, sink(cached = true), rays = 2, tus = 1, cachePathCycles = path)
       assert(c.latencyCycles == expect, s"cache path of $path cycles")
       assert(c.dramCycles < u.dramCycles)
     }

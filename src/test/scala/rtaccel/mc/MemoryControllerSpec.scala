@@ -39,7 +39,7 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
     val primResp = if (p.respByPath) Some(chisel3.util.Decoupled(new FetchBeat(axi.dataBits, p.respTagBits))) else None
     val primBase = Input(UInt(axi.addrBits.W))
     val maxLevel = Input(UInt(4.W))
-    val counters = Output(new McCounters)
+    val counters = Output(new McCounters(p.hw.mcCounterBits))
     val arBursts = Output(UInt(32.W))
     val maxLen = Output(UInt(8.W))
     val badBurst = Output(Bool())

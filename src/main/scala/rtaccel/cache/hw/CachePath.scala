@@ -16,8 +16,8 @@ final case class CacheGeometry(c: CacheParams, entriesPerLine: Int, lineBeats: I
   require(lines % c.ways == 0, s"cache ways (${c.ways}) must divide its lines ($lines)")
   val beatBits: Int = log2Ceil(lineBeats)
   /** hybrid: the complementary LRP cache beside the direct-mapped array (same sizes as CacheModel) */
-  val sideLines: Int = if (c.policy == CachePolicy.Hybrid) math.max(1, lines / 8) else 0
-  val sideWays: Int = if (c.policy == CachePolicy.Hybrid) math.min(4, sideLines) else 0
+  val sideLines: Int = c.sideLines(lines)
+  val sideWays: Int = c.sideWays(lines)
   val dataLines: Int = lines + sideLines
 }
 
@@ -79,7 +79,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val missQ = Module(new Queue(g.memReq, hw.cacheMissQueue))
   io.memReq <> missQ.io.deq
 
-  val hits = RegInit(0.U(48.W)); val misses = RegInit(0.U(48.W)); val bypasses = RegInit(0.U(48.W))
+  val hits = RegInit(0.U(hw.mcCounterBits.W)); val misses = RegInit(0.U(hw.mcCounterBits.W)); val bypasses = RegInit(0.U(hw.mcCounterBits.W))
   io.stats.hits := hits; io.stats.misses := misses; io.stats.bypasses := bypasses
 
   // ---------------------------------------------------------------- lookup: stage 0 reads, stage 1 decides
@@ -125,8 +125,8 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   } else {
     val tagRuw = if (!g0.p.tagForward) SyncReadMem.Undefined else if (forwardWrites) SyncReadMem.WriteFirst else SyncReadMem.ReadFirst
     val mainPol = Policies.of(if (isHybrid) CachePolicy.Dm else c.policy, c.ways)
-    val main = new TagArray(cg.lines / c.ways, mainPol, lrp = c.policy.levelAware, hw.levelCodeBits, tagRuw)
-    val arrays = Seq(main) ++ (if (isHybrid) Seq(new TagArray(cg.sideLines / cg.sideWays, Policies.of(CachePolicy.Lru, cg.sideWays), lrp = true, hw.levelCodeBits, tagRuw)) else Nil)
+    val main = new TagArray(cg.lines / c.ways, mainPol, lrp = c.policy.levelAware, hw.levelCodeBits, hw.policyStateBits, tagRuw)
+    val arrays = Seq(main) ++ (if (isHybrid) Seq(new TagArray(cg.sideLines / cg.sideWays, Policies.of(CachePolicy.Lru, cg.sideWays), lrp = true, hw.levelCodeBits, hw.policyStateBits, tagRuw)) else Nil)
     val entries = arrays.map(_.read(lookLine))
     val ds = arrays.zip(entries).map { case (a, e) => a.decide(e, s1.line, s1.level, io.maxLevel) }
     // data line of (set, way): set * ways + way, after `base` lines of the arrays before this one
@@ -301,8 +301,8 @@ object CachePath {
     rtaccel.config.Fit.checkLevelField(p)
     for ((what, c) <- Seq("NODE" -> p.nodeCache, "PRIM" -> p.primCache) if c.entries > 0) {
       val pol = try Policies.of(c.policy, c.ways) catch { case e: IllegalArgumentException => fail(s"${what}_POLICY: ${e.getMessage.stripPrefix("requirement failed: ")}") }
-      if (pol.stateBits > PolicyTables.MaxStateBits)
-        fail(s"${what}_WAYS=${c.ways} with ${c.policy}: the RTL tabulates at most ${PolicyTables.MaxStateBits} state bits per set (true LRU up to 4 ways, PLRU up to 8); use fewer ways or make cachesim")
+      if (pol.stateBits > p.hw.policyStateBits)
+        fail(s"${what}_WAYS=${c.ways} with ${c.policy}: the RTL tabulates at most ${p.hw.policyStateBits} state bits per set (true LRU up to 4 ways, PLRU up to 8); use fewer ways or make cachesim")
     }
     if (p.primCache.entries > 0 && !CachePolicy.primRtl(p.primCache.policy))
       fail(s"PRIM_POLICY=${p.primCache.policy} is not built in RTL (leaf references carry no level, and the static buffer preloads nodes); use dm|lru|plru, or make cachesim for the model")

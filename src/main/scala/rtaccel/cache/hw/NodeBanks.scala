@@ -32,7 +32,7 @@ class NodeBanks(p: PlatformParams, axiP: AxiParams) extends Module {
     val maxLevel = Input(UInt(p.hw.levelCodeBits.W))
     val clearCounters = Input(Bool())
     val axi = Vec(k, new AxiReadMaster(axiP)) // one master per bank
-    val counters = Output(Vec(k, new McCounters))
+    val counters = Output(Vec(k, new McCounters(p.hw.mcCounterBits)))
     val tap = Output(Vec(k, Valid(UInt(32.W)))) // the reference each bank accepts (its access order)
   })
   // a bank's cache: entries / k lines of the configured ways and policy (PlatformParams checks k divides the sets)

@@ -8,12 +8,10 @@ import rtaccel.cache.policy.{LevelPolicy, ReplacementPolicy}
   * model cannot disagree on a rule: the circuit only indexes tables the Scala functions filled in.
   */
 object PolicyTables {
-  /** Largest state a table may be indexed by (rows = 2^stateBits). */
-  val MaxStateBits = 10
-
-  def check(pol: ReplacementPolicy): Unit =
-    require(pol.stateBits <= MaxStateBits,
-      s"the RTL tabulates replacement state of up to $MaxStateBits bits; ${pol.ways}-way ${pol.getClass.getSimpleName} " +
+  /** Refuses a policy whose state needs more than `maxStateBits` (HwLimits.policyStateBits; rows = 2^stateBits). */
+  def check(pol: ReplacementPolicy, maxStateBits: Int): Unit =
+    require(pol.stateBits <= maxStateBits,
+      s"the RTL tabulates replacement state of up to $maxStateBits bits; ${pol.ways}-way ${pol.getClass.getSimpleName} " +
         s"needs ${pol.stateBits}: use fewer ways (true LRU up to 4, tree PLRU up to 8)")
 
   /** Rows for states the policy can reach; other rows are never indexed and hold 0. */

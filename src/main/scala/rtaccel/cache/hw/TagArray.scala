@@ -37,9 +37,9 @@ final class Decision(val hit: Bool, val fill: Bool, val way: UInt, val next: Set
   * WRITE_FIRST mode) hands it the set just written, the read-after-write forwarding. (ReadFirst only in the formal
   * checks: the stale set, the mutant they must refute.)
   */
-class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBits: Int,
+class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBits: Int, maxStateBits: Int,
                ruw: SyncReadMem.ReadUnderWrite = SyncReadMem.Undefined) {
-  PolicyTables.check(pol)
+  PolicyTables.check(pol, maxStateBits)
   val ways: Int = pol.ways
   val setBits: Int = log2Ceil(sets)
   val tagBits: Int = 32 - setBits
