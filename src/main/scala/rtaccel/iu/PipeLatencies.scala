@@ -19,7 +19,9 @@ object PipeLatencies {
     * Inside the board top's own elaboration, take them from its instances instead (RtAccelTop does).
     */
   def of(p: PlatformParams): PipeLatencies = {
-    val key = s"${p.stageBudget} ${p.m} ${p.tus} ${p.boxFormat} ${p.triTest} ${p.triFormat} ${p.divStages} ${p.boxSlackUlps}"
+    // with a budget, the family's DSP tile (its latency) and delay chains (LUT RAM or flip-flops) shape the pipes too
+    val key = s"${p.stageBudget} ${p.m} ${p.tus} ${p.boxFormat} ${p.triTest} ${p.triFormat} ${p.divStages} ${p.boxSlackUlps}" +
+      p.stageBudget.fold("")(_ => s" ${p.dspShape} ${p.delayRamCycles}")
     memo.getOrElseUpdate(key, {
       val annos = new chisel3.stage.ChiselGeneratorAnnotation(() => new Probe(p)).elaborate
       annos.collectFirst { case d: chisel3.stage.DesignAnnotation[_] => d.design.asInstanceOf[Probe].latencies }.get
