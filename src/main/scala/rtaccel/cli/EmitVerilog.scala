@@ -26,14 +26,36 @@ object EmitVerilog {
     p
   }
 
-  /** SystemVerilog of the board top of `p`, one file per module in `out` (old .sv files removed); the files. */
-  def emit(p: rtaccel.config.PlatformParams, out: java.nio.file.Path): Seq[java.nio.file.Path] = emitModule(new RtAccelTop(p), out)
-
-  /** SystemVerilog of any module (make area-fp's probes as well as the board top), as `emit` writes it. */
-  def emitModule(gen: => chisel3.RawModule, out: java.nio.file.Path): Seq[java.nio.file.Path] = {
+  /** SystemVerilog of the board top of `p`, one file per module in `out` (old .sv files removed); the files.
+    * The last few circuits' text is kept in memory: CLOCK_MHZ=fmax, make timing and make area each emit the
+    * circuit they look up, often the same one again in one process (seconds of elaboration each time).
+    */
+  def emit(p: rtaccel.config.PlatformParams, out: java.nio.file.Path): Seq[java.nio.file.Path] = {
+    val key = Simulate.paramsDigest(p) // what shapes the circuit: not the preset's name, not a clock within the budget
+    val kept = recent.synchronized(Option(recent.get(key)))
+    kept match {
+      case Some(texts) =>
+        clearSv(out)
+        texts.map { case (name, bytes) => Files.write(out.resolve(name), bytes) }.sortBy(_.toString)
+      case None =>
+        val files = emitModule(new RtAccelTop(p), out)
+        val texts = files.map(f => f.getFileName.toString -> Files.readAllBytes(f))
+        recent.synchronized(recent.put(key, texts))
+        files
+    }
+  }
+  private val recent = new java.util.LinkedHashMap[String, Seq[(String, Array[Byte])]](4, 0.75f, true) {
+    override def removeEldestEntry(e: java.util.Map.Entry[String, Seq[(String, Array[Byte])]]): Boolean = size > 2
+  }
+  private def clearSv(out: java.nio.file.Path): Unit = {
     Files.createDirectories(out)
     // a previous configuration's modules must not linger next to this one's
     Files.list(out).toArray.map(_.asInstanceOf[java.nio.file.Path]).filter(f => f.toString.endsWith(".sv")).foreach(Files.delete)
+  }
+
+  /** SystemVerilog of any module (make area-fp's probes as well as the board top), as `emit` writes it. */
+  def emitModule(gen: => chisel3.RawModule, out: java.nio.file.Path): Seq[java.nio.file.Path] = {
+    clearSv(out)
     // randomization off and debug info stripped: the output is for synthesis and lint, not for simulation
     new _root_.circt.stage.ChiselStage().execute(
       Array("--target-dir", out.toString, "--target", "systemverilog", "--split-verilog") ++
