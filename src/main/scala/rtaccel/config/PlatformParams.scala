@@ -72,8 +72,8 @@ final case class HwLimits(
   cacheHitQueue: Int = 4,     // RESP_ORDER=tagged: hits a cache path holds for its data RAM beside the misses' tickets
   dramQueueDepth: Int = 16,   // AR requests the simulated DRAM queues
   levelCodeBits: Int = 4,     // paper Section 7.2: node levels 0..14, 15 = 15 and deeper
-  mcCounterBits: Int = 48,
-  policyStateBits: Int = 10,  // replacement state per set the RTL tabulates (2^bits rows: true LRU to 4 ways, PLRU to 8)    // the MC's and its caches' event counters (never cleared by traffic: 2^48 events)
+  mcCounterBits: Int = 48,    // the MC's and its caches' event counters (never cleared by traffic: 2^48 events)
+  policyStateBits: Int = 10,  // replacement state per set the RTL tabulates (2^bits rows: true LRU to 4 ways, PLRU to 8)
   // MEM_CHANNELS > 1: bytes of one channel's address block (channel = (addr / this) mod channels); a burst never
   // crosses 4 KB (BurstSplitter), so a block of 4 KB or more keeps every burst in one channel
   channelInterleaveBytes: Int = 4096
