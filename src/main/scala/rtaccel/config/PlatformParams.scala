@@ -261,10 +261,10 @@ final case class PlatformParams(
     * cluster, then one per node bank */
   val memControllers: Int = ius + nodeBanks
   /** Cycles PIPELINE's registers add to every memory access: the IU arbiter's registered grant, the IU's request
-    * slice, the MC's after its arbiter, the IU's slice on the MC's responses and its register in front of its pipes
-    * (the throughput model adds them; cache.Throughput).
+    * slice, the MC's after its arbiter, the IU's slice on the MC's responses, its register in front of its pipes and
+    * the TU's on its answer (the throughput model adds them; cache.Throughput).
     */
-  def accessSliceCycles: Int = if (stageBudget.isDefined) 5 else 0
+  def accessSliceCycles: Int = if (stageBudget.isDefined) 6 else 0
   /** Whether the cluster MCs give each path a response buffer: caches reorder DRAM traffic between the paths, and
     * with several clusters or channels the buffers keep one's R beats from waiting on another's (MemoryController).
     */

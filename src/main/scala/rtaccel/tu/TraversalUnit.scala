@@ -47,6 +47,16 @@ class TraversalUnit(p: PlatformParams) extends Module {
     val index = Input(UInt(p.tuBits.W)) // a port, not a parameter, so that every TU is one module
   })
   private val index = io.index
+  // with PIPELINE this TU's answers from the IU pass a register here: the compares of the TU's own tmax with an
+  // answer, and the state enables they drive, then sit in the TU and not beside the IU's pipes across the chip (the
+  // smallest platform's routed critical path on ECP5, docs/timing.md; a cycle more per answer:
+  // PlatformParams.accessSliceCycles)
+  private def mine[T <: Data](v: Valid[T], tu: T => UInt): Valid[T] = {
+    val w = Wire(Valid(chiselTypeOf(v.bits))); w.valid := v.valid && tu(v.bits) === index; w.bits := v.bits
+    rtaccel.arb.Slice.late(p, w)
+  }
+  private val boxIn = mine[BoxResult](io.box, _.tu)
+  private val triIn = mine[TriResult](io.tri, _.tu)
   private val f = FpFormat.fp32
   private val inf = "h7f800000".U(32.W)
 
@@ -86,8 +96,8 @@ class TraversalUnit(p: PlatformParams) extends Module {
 
   // Node: the hit children in the order of their ranks (the box pipe's: nearer first, an equal one in an earlier
   // slot first).
-  when(state === S.waitBox && io.box.valid && io.box.bits.tu === index) {
-    val b = io.box.bits
+  when(state === S.waitBox && boxIn.valid) {
+    val b = boxIn.bits
     when(b.err) { readError := true.B } // b.hit is all false then: the ray pops on
     val ranks = b.rank
     for (j <- 0 until p.m) when(b.hit(j)) {
@@ -116,8 +126,8 @@ class TraversalUnit(p: PlatformParams) extends Module {
   }
 
   // Leaf: results arrive in slot order; an earlier equal t is kept.
-  when(state === S.waitTri && io.tri.valid && io.tri.bits.tu === index) {
-    val t = io.tri.bits
+  when(state === S.waitTri && triIn.valid) {
+    val t = triIn.bits
     when(t.err) { readError := true.B }
     when(t.hit && Fp.lt(f, t.t, tmax)) {
       tmax := t.t; best.t := t.t; best.prim := t.prim; best.u := t.u; best.v := t.v

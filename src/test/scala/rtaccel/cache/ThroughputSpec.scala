@@ -31,16 +31,17 @@ class ThroughputSpec extends AnyFunSuite {
     assert(u.beatCycles == (2 * 128 + 192) / 32.0)
     assert(math.abs(u.raysPerCycle - 1 / 232.0) < 1e-15)
     // PIPELINE=auto: every node test takes the box pipe's extra cycles, every leaf the triangle pipe's (2 + 1 per ray),
-    // and each of the 3 accesses five cycles of registers (the IU arbiter's registered grant, the IU's request slice,
-    // its slice on the MC's responses and its register in front of the pipes, the MC's slice after its arbiter); paper2017 has a node cache, so its MC has response buffers and a path slices of its own
+    // and each of the 3 accesses six cycles of registers (the IU arbiter's registered grant, the IU's request slice,
+    // its slice on the MC's responses and its register in front of the pipes, the MC's slice after its arbiter, the TU's
+    // register on its answer); paper2017 has a node cache, so its MC has response buffers and a path slices of its own
     // (its DRAM read, its beats into and out of the buffer): here no access is cached, three cycles more each
     val (bx, tx) = rtaccel.iu.PipeLatencies.extraOverFixed(Presets.paper2017)
-    assert(bx > 0 && tx > 0 && Presets.paper2017.accessSliceCycles == 5 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 3)
-    assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 8)
+    assert(bx > 0 && tx > 0 && Presets.paper2017.accessSliceCycles == 6 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 3)
+    assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 9)
     // without a cache (one cluster, one channel, request order) there are no response buffers and no path slice
     val bare = Presets.paper2017.copy(nodeCache = CacheParams())
     assert(bare.passSliceCycles == 0 && bare.copy(ius = 2).passSliceCycles == 3)
-    assert(Throughput.predict(bare, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 5)
+    assert(Throughput.predict(bare, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 6)
     // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:
     // (2 x 232 - 2 x 72 + 2 x 4 + 4 x path) / 2, by hand for two path latencies
     for ((path, expect) <- Seq(8.0 -> 180.0, 5.0 -> 174.0)) {
