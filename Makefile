@@ -22,22 +22,34 @@ SEED    ?= 1
 SHARED_SCENES ?= $(abspath ../shared/scenes)
 RUN_CONFIG ?= paper2017
 RUN_NODE_CACHE ?= 8192
-# A preset is the whole platform it names (caches included); each variable given overrides one field, an
-# absent one keeps the preset's value (README "Configurations").
-PLATFORM_KNOBS = $(if $(M),--m $(M)) $(if $(MPPL),--mppl $(MPPL)) $(if $(TUS),--tus $(TUS)) $(if $(IUS),--ius $(IUS)) $(if $(MEM_CHANNELS),--mem-channels $(MEM_CHANNELS)) $(if $(RESP_ORDER),--resp-order $(RESP_ORDER)) $(if $(RAY_STORE),--ray-store $(RAY_STORE)) $(if $(TAG_FORWARD),--tag-forward $(TAG_FORWARD)) $(if $(NODE_BANKS),--node-banks $(NODE_BANKS)) \
-  $(if $(STACK),--stack-depth $(STACK)) $(if $(SHORT_STACK),--short-stack $(SHORT_STACK)) $(if $(BOX_FORMAT),--box-format $(BOX_FORMAT)) \
-  $(if $(TRI_TEST),--tri-test $(TRI_TEST)) $(if $(TRI_FORMAT),--tri-format $(TRI_FORMAT)) $(if $(NODE_FORMAT),--node-format $(NODE_FORMAT)) $(if $(PRIM_FORMAT),--prim-format $(PRIM_FORMAT)) $(if $(BOARD),--board $(BOARD)) $(if $(MEM_GBPS),--mem-gbps $(MEM_GBPS)) \
-  $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ)) $(if $(PIPELINE),--pipeline $(PIPELINE)) $(CACHE_FLAGS)
-MODEL_ARGS = --config $(CONFIG) $(PLATFORM_KNOBS)
+# The platform knobs come from the knob registry's export (config/knobs.json, `make knobs`; rtaccel.config.Knobs):
+# KNOB_NAMES, each knob's flag KNOB_FLAG_<K> and the targets that read it KNOB_USE_<K>. No knob is spelled here.
+build/knobs.mk: config/knobs.json tools/knobs-mk
+	@mkdir -p build && python3 tools/knobs-mk $< > $@.tmp && mv $@.tmp $@
+include build/knobs.mk
+# the flags of the knobs among $(1) that are given
+knob_flags = $(foreach k,$(1),$(if $($(k)),$(KNOB_FLAG_$(k)) $($(k))))
+# A preset is the whole platform it names (caches included); each knob given overrides one field, an absent one
+# keeps the preset's value (README "Configurations").
+PLATFORM_KNOBS = $(call knob_flags,$(filter-out CONFIG,$(KNOB_NAMES)))
+# A knob given on the command line to a target that does not read it is refused (make would ignore it); the
+# targets' own calls of make (MAKELEVEL > 0) pass what they were given on
+ifeq ($(MAKELEVEL),0)
+KNOBS_UNUSED := $(strip $(foreach g,$(MAKECMDGOALS),$(foreach k,$(KNOB_NAMES),$(if $(filter command line,$(origin $(k))),$(if $(filter $(g),$(KNOB_USE_$(k))),,$(k)=$($(k)) on $(g))))))
+ifneq ($(KNOBS_UNUSED),)
+$(error $(firstword $(KNOBS_UNUSED)) has no effect on make $(word 3,$(KNOBS_UNUSED)): leave it out; $(firstword $(subst =, ,$(firstword $(KNOBS_UNUSED)))) is read by make $(subst $() ,|,$(KNOB_USE_$(firstword $(subst =, ,$(firstword $(KNOBS_UNUSED)))))))
+endif
+endif
+MODEL_ARGS = $(call knob_flags,CONFIG) $(PLATFORM_KNOBS)
 TRIS       = $$(tools/tris $(SCENE))
 
 SCALA_SRC := $(shell find src/main -name '*.scala' 2>/dev/null) build.sbt project/build.properties
 
 .PHONY: help deps venv verilator z3 run test test-scala test-python fixtures golden trace cachesim check analyze bench clean \
-        yosys verilog area area-fp timing timing-fit cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity paper
+        yosys verilog area area-fp timing timing-fit cost-model max-tus lint simulate roofline soak regress paper-nocache paper-caches bench-caches dse precision fidelity paper knobs
 
 help:
-	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | timing | timing-fit | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity | paper   (see README.md)"
+	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | timing | timing-fit | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity | paper | knobs   (see README.md)"
 
 # ---------------------------------------------------------------- installation
 deps: venv verilator $(CP_FILE)
@@ -102,11 +114,6 @@ trace: deps
 	  $(JAVA) rtaccel.cli.Trace --tris "$$T" --scene-label $(SCENE) --rays $$R --out $$OUT $(MODEL_ARGS) && $(IMAGE)
 
 # Node/primitive cache models on the traversal's accesses (docs/caches.md). Last stdout line: JSON.
-# CACHE_FLAGS: the cache variables given (absent ones keep the preset's cache; NODE_CACHE=0 removes it).
-CACHE_FLAGS = $(if $(NODE_CACHE),--node-cache $(NODE_CACHE)) $(if $(NODE_WAYS),--node-ways $(NODE_WAYS)) \
-  $(if $(NODE_POLICY),--node-policy $(NODE_POLICY)) $(if $(MAX_LEVEL),--max-level $(MAX_LEVEL)) \
-  $(if $(PRIM_CACHE),--prim-cache $(PRIM_CACHE)) $(if $(PRIM_WAYS),--prim-ways $(PRIM_WAYS)) \
-  $(if $(PRIM_POLICY),--prim-policy $(PRIM_POLICY))
 CACHE_ARGS = $(if $(SWEEP),--sweep-out $(SWEEP)) $(EXTRA_CACHESIM)
 cachesim: deps
 	@$(RAYS_OR_GOLDEN); \
@@ -135,13 +142,12 @@ PRECISION_EXHAUSTIVE ?= 1000
 precision: TUS ?= 32
 precision: NODE_CACHE ?= 8192
 precision: deps
-	@[ -z "$(BOX_FORMAT)$(TRI_TEST)$(TRI_FORMAT)" ] || { echo "error: make precision runs every option itself; list them in PRECISION_OPTIONS=\"fp32:mt bf16:watertight fp32:mt@fp64 ...\" instead of BOX_FORMAT= / TRI_TEST= / TRI_FORMAT=" >&2; exit 2; }
 	@test -f "$(SCENE)" || { echo "error: scene '$(SCENE)' not found; give SCENE=<path to .obj or .ply>" >&2; exit 2; }
 	@OUT=$${OUT:-build/precision/$$(basename $(SCENE) | sed 's/\.[a-z]*$$//')}; G=$(GOLDEN); mkdir -p $$OUT; \
 	  if [ -z "$$G" ]; then G=$$OUT/golden; [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=$$G >&2 || exit $$?; fi; \
 	  T=$(TRIS) && $(PY) -m dse.precision --scene $(SCENE) --tris "$$T" --golden $$G --out $$OUT --java '$(JAVA)' \
 	    --knobs "$(MODEL_ARGS)" --options "$(PRECISION_OPTIONS)" --rtl $(PRECISION_RTL) --area $(PRECISION_AREA) \
-	    --exhaustive $(PRECISION_EXHAUSTIVE) $(if $(BOARD),--board $(BOARD))
+	    --exhaustive $(PRECISION_EXHAUSTIVE) $(call knob_flags,BOARD)
 
 # The loop every multi-scene target shares: for each mesh s of $(1) (absent: skipped with a note naming
 # $(2), or an error when $(6) is "strict"), n = its name, G = $(3); the golden frame $(4) x $(5) (DEPTH, SEED)
@@ -215,8 +221,7 @@ max-tus: deps yosys
 # fixed depth and at the depth PIPELINE (default auto) gives at CLOCK_MHZ (default the board's): table on stderr,
 # JSON last line; cached like make area.
 area-fp: deps yosys
-	@$(JAVA) rtaccel.cli.AreaFp $(if $(BOARD),--board $(BOARD)) $(if $(OPS),--ops $(OPS)) $(if $(OUT),--out $(OUT)) \
-	  $(if $(PIPELINE),--pipeline $(PIPELINE)) $(if $(CLOCK_MHZ),--clock-mhz $(CLOCK_MHZ))
+	@$(JAVA) rtaccel.cli.AreaFp $(call knob_flags,BOARD CATALOG PIPELINE CLOCK_MHZ) $(if $(OPS),--ops $(OPS)) $(if $(OUT),--out $(OUT))
 
 # Lint waivers, each with its reason, are in tools/lint.vlt.
 LINT_WAIVERS = tools/lint.vlt
@@ -268,11 +273,14 @@ regress: deps yosys z3 fixtures
 # Paper Figs 12-13 without cache: rays/s and memory utilisation vs TUs (CSV + PNG in build/paper-nocache).
 NOCACHE_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
 NOCACHE_TUS ?= 1,2,4,8,16,32
+# Figs 4, 8-9, 11-13 are drawn at the paper's M and MPPL unless given
+paper-nocache paper-caches: M ?= 4
+paper-nocache paper-caches: MPPL ?= 4
 paper-nocache: deps
 	@mkdir -p build/paper-nocache; csvs=""; $(call SCENE_LOOP,$(NOCACHE_SCENES),paper-nocache,build/paper-nocache/$$n/golden,32,24) \
 	  d=build/paper-nocache/$$n; \
 	  T=$$(tools/tris $$s); $(JAVA) rtaccel.cli.SweepTus --tris "$$T" --scene-label $$s --rays $$d/golden/rays.npy --out $$d \
-	    --config paper2017 --node-cache 0 --m $(or $(M),4) --mppl $(or $(MPPL),4) --tus-list $(NOCACHE_TUS) || exit $$?; csvs="$$csvs $$d/tus_sweep.csv"; done; \
+	    --config paper2017 --node-cache 0 $(call knob_flags,M MPPL) --tus-list $(NOCACHE_TUS) || exit $$?; csvs="$$csvs $$d/tus_sweep.csv"; done; \
 	  [ -z "$$csvs" ] || $(PY) -m dse.plot_tus build/paper-nocache/tus_sweep.png $$csvs
 
 # Paper Figs 11 (node-cache miss rate vs size) and 8-9 (DRAM bytes per ray vs MPPL) from the cache model, and
@@ -295,7 +303,7 @@ paper-caches: deps
 	  GT=$$d/golden/$(PAPER_TUS_WIDTH)x$(PAPER_TUS_HEIGHT)-d$(DEPTH)-s$(SEED); \
 	  [ -z "$(PAPER_TUS)" ] || [ "$$GT/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$GT WIDTH=$(PAPER_TUS_WIDTH) HEIGHT=$(PAPER_TUS_HEIGHT) >/dev/null || exit $$?; \
 	  T=$$(tools/tris $$s) || exit $$?; \
-	  $(PY) -m dse.paper_caches --scene $$s --tris "$$T" --rays $$G/rays.npy $$( [ -z "$(PAPER_TUS)" ] || echo --tus-rays $$GT/rays.npy) --out $$d --java '$(JAVA)' --m $(or $(M),4) --mppl $(or $(MPPL),4) \
+	  $(PY) -m dse.paper_caches --scene $$s --tris "$$T" --rays $$G/rays.npy $$( [ -z "$(PAPER_TUS)" ] || echo --tus-rays $$GT/rays.npy) --out $$d --java '$(JAVA)' $(call knob_flags,M MPPL) \
 	    --tus-list "$(PAPER_TUS)" --nocache-csv build/paper-nocache/$$n/tus_sweep.csv || exit $$?; \
 	  f11="$$f11 $$d/fig11_miss_rate.csv"; f89="$$f89 $$d/fig8_9_bytes_per_ray.csv"; \
 	  [ -z "$(PAPER_TUS)" ] || tus="$$tus $$d/tus_sweep.csv $$( [ -f build/paper-nocache/$$n/tus_sweep.csv ] && echo build/paper-nocache/$$n/tus_sweep.csv)"; done; \
@@ -349,6 +357,11 @@ fidelity: deps
 	  --caches "$(FIDELITY_CACHES)" --mppls "$(FIDELITY_MPPLS)" --node-cache $(FIDELITY_NODE_CACHE) \
 	  --width $(FIDELITY_WIDTH) --height $(FIDELITY_HEIGHT) --depth $(FIDELITY_DEPTH) --seed $(SEED) \
 	  --workers $(FIDELITY_WORKERS) --out build/fidelity --java '$(DSE_JAVA)' --version $(VERSION)
+
+# The knob registry (rtaccel.config.Knobs) exported to config/knobs.json, which this Makefile and dse/ read; run it
+# after changing a knob (KnobsSpec fails while the file differs from the registry).
+knobs: deps
+	@$(JAVA) rtaccel.cli.KnobsCmd --out config/knobs.json
 
 # ---------------------------------------------------------------- tests
 FIXTURE_SCENES := cornell hairball soup extreme

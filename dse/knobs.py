@@ -1,8 +1,9 @@
 """The knobs a space file may name: each Makefile variable, the rtaccel.cli flag it becomes, and its legal values.
 
-One table, so that a space file, the JVM requests and the `make verilog ...` command of a result all spell a knob
-the same way. The checks here are the ones a space file can be refused for up front; combinations the platform
-refuses (e.g. MPPL over a preset's leaf count field) are refused by the JVM and recorded as failed points.
+Read from the knob registry's export (config/knobs.json, `make knobs`, rtaccel.config.Knobs): a space file, the JVM
+requests and the `make verilog ...` command of a result spell a knob as the registry does, and a value is judged
+by the registry's rule (its domain, as data, interpreted here). Combinations the platform refuses (e.g. MPPL over a
+preset's leaf count field) are refused by the JVM and recorded as failed points.
 """
 import functools
 import json
@@ -13,9 +14,7 @@ from dataclasses import dataclass
 from scenes.procedural import NAMES as PROCEDURAL_SCENES  # noqa: F401  (re-exported for dse.space)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-PRESETS = ("fit", "paper2017", "paper2017-lrp", "small")  # rtaccel.config.Presets.all plus CONFIG=fit
-POLICIES = ("dm", "lru", "plru", "lrp", "bf", "hybrid")   # rtaccel.config.CachePolicy.parse
-LEVEL_AWARE = ("lrp", "hybrid")  # CachePolicy.levelAware: the node refs carry the tree level (paper Section 7.2)
+EXPORT = os.path.join(ROOT, "config", "knobs.json")
 
 
 @functools.lru_cache(maxsize=None)
@@ -26,82 +25,58 @@ def boards(catalog=os.path.join(ROOT, "boards", "catalog.json")):
         return json.load(f)["boards"]
 
 
-def _pow2(v):
-    return isinstance(v, int) and v > 0 and v & (v - 1) == 0
+def accepts(domain, value):
+    """Whether the registry's domain (config.Knobs.Domain as exported) takes `value` (as its string, names in any case)."""
+    if isinstance(value, bool):
+        return False
+    v = str(value).lower()
+    kind = domain["kind"]
+    if kind == "ints":
+        if not re.fullmatch(r"-?\d+", v):
+            return False
+        n = int(v)
+        return (domain["zero"] and n == 0) or (domain["lo"] <= n <= domain["hi"] and (not domain["pow2"] or n & (n - 1) == 0))
+    if kind == "names":
+        return v in domain["names"]
+    if kind == "positive":
+        try:
+            d = float(v)
+        except ValueError:
+            return False
+        return 0 < d < float("inf")
+    if kind == "template":
+        m = re.fullmatch("".join(f"{p['letter']}(\\d+)" for p in domain["parts"]), v)
+        return m is not None and all(len(n) <= 4 and p["lo"] <= int(n) <= p["hi"] for n, p in zip(m.groups(), domain["parts"]))
+    if kind == "any_of":
+        return any(accepts(d, value) for d in domain["of"])
+    if kind == "board":
+        return v in boards()
+    if kind == "file":
+        return bool(v)
+    raise ValueError(f"config/knobs.json: unknown domain kind '{kind}'; run make knobs")
 
 
 @dataclass(frozen=True)
 class Knob:
     flag: str
     rule: str          # what the error message says is allowed
-    ok: object         # value -> bool
+    domain: dict       # the registry's domain
     cost: bool = True  # changes the circuit (so the area rung and `make verilog` see it)
 
-
-def _int(lo, hi):
-    return lambda v: isinstance(v, int) and not isinstance(v, bool) and lo <= v <= hi
-
-
-def _one_of(names):
-    return lambda v: v in names
+    def ok(self, value):
+        return accepts(self.domain, value)
 
 
-def _box_format(v):
-    # rtaccel.fp.FpFormat.parse and PlatformParams' rule: at most fp32's 8 exponent and 23 fraction bits;
-    # m<M> = M fraction bits with the exponent fitted to the scene (config.BoxRange)
-    m = re.fullmatch(r"e(\d+)m(\d+)", v) if isinstance(v, str) else None
-    f = re.fullmatch(r"m(\d+)", v) if isinstance(v, str) else None
-    return (v in ("fp32", "fp24", "bf16", "fp16") or (m is not None and 3 <= int(m[1]) <= 8 and 2 <= int(m[2]) <= 23)
-            or (f is not None and 2 <= int(f[1]) <= 23))
+def _load():
+    with open(EXPORT) as f:
+        export = json.load(f)
+    knobs = {k["make"]: Knob(k["flag"], k["rule"], k["domain"], k["shapes_circuit"]) for k in export["knobs"]}
+    return knobs, tuple(export["level_aware_policies"])
 
 
-def _tri_format(v):
-    # config.Numerics.parseTriFormat: fp32 or wider, at most fp64's 11 exponent and 52 fraction bits
-    m = re.fullmatch(r"e(\d+)m(\d+)", v) if isinstance(v, str) else None
-    return v in ("fp32", "fp64") or (m is not None and 8 <= int(m[1]) <= 11 and 23 <= int(m[2]) <= 52)
-
-
-def _cache(v):
-    return v == 0 or (_pow2(v) and v <= 1 << 16)
-
-
-KNOBS = {
-    "CONFIG": Knob("--config", f"one of {', '.join(PRESETS)}", _one_of(PRESETS)),
-    "TUS": Knob("--tus", "an integer 1..1024", _int(1, 1024)),
-    # TUS must be a multiple of IUS: the JVM refuses a point that is not (recorded as failed)
-    "IUS": Knob("--ius", "an integer 1..64 (intersection units; TUS must be a multiple)", _int(1, 64)),
-    "MEM_CHANNELS": Knob("--mem-channels", "1, 2, 4, 8 or 16 (address-interleaved DRAM channels, MEM_GBPS each)",
-                         lambda v: _int(1, 16)(v) and _pow2(v)),
-    "RESP_ORDER": Knob("--resp-order", "request (one in-order stream, the paper's), path (node and primitive streams) "
-                       "or tagged (the two streams, hits under misses)", _one_of(("request", "path", "tagged"))),
-    "RAY_STORE": Knob("--ray-store", "0 (every request carries its ray, the paper's) or 1 (rays in each IU's ray store)", _one_of((0, 1))),
-    "TAG_FORWARD": Knob("--tag-forward", "0 (cache tags take one lookup per two cycles) or 1 (one per cycle, forwarding the set just written)", _one_of((0, 1))),
-    "NODE_BANKS": Knob("--node-banks", "0 (a node cache per IU) or a power of two 1..64 (one node cache shared by every IU, "
-                       "in that many banks)", _one_of((0, 1, 2, 4, 8, 16, 32, 64))),
-    "M": Knob("--m", "2, 4 or 8", _one_of((2, 4, 8))),
-    "MPPL": Knob("--mppl", "an integer 1..16", _int(1, 16)),
-    "STACK": Knob("--stack-depth", "an integer 1..4096", _int(1, 4096)),
-    "SHORT_STACK": Knob("--short-stack", "an integer 1..64", _int(1, 64)),
-    "BOX_FORMAT": Knob("--box-format", "fp32, fp24, bf16, fp16, e<E>m<M> with E <= 8, M <= 23, or m<M> (exponent fitted to the scene)", _box_format),
-    "TRI_TEST": Knob("--tri-test", "mt or watertight", _one_of(("mt", "watertight"))),
-    "TRI_FORMAT": Knob("--tri-format", "fp32, fp64 or e<E>m<M> with 8 <= E <= 11, 23 <= M <= 52 (Möller–Trumbore only)", _tri_format),
-    "NODE_FORMAT": Knob("--node-format", "full, q2..q16 (quantized planes) or fit",
-                        lambda v: isinstance(v, str) and re.fullmatch(r"full|fit|q([2-9]|1[0-6])", v) is not None),
-    "PRIM_FORMAT": Knob("--prim-format", "slot64 or packed (40 B records, a beat-aligned row per leaf)", _one_of(("slot64", "packed"))),
-    "NODE_CACHE": Knob("--node-cache", "0 or a power of two up to 65536", _cache),
-    "NODE_WAYS": Knob("--node-ways", "a power of two 1..64", lambda v: _pow2(v) and v <= 64),
-    "NODE_POLICY": Knob("--node-policy", f"one of {', '.join(POLICIES)}", _one_of(POLICIES)),
-    "MAX_LEVEL": Knob("--max-level", "an integer 0..15", _int(0, 15)),
-    "PRIM_CACHE": Knob("--prim-cache", "0 or a power of two up to 65536", _cache),
-    "PRIM_WAYS": Knob("--prim-ways", "a power of two 1..64", lambda v: _pow2(v) and v <= 64),
-    "PRIM_POLICY": Knob("--prim-policy", f"one of {', '.join(POLICIES)}", _one_of(POLICIES)),
-    "BOARD": Knob("--board", "a board of boards/catalog.json", lambda v: isinstance(v, str) and v in boards()),
-    "MEM_GBPS": Knob("--mem-gbps", "a number > 0", lambda v: isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0, cost=False),
-    # "fmax": each point at the clock measured for its own circuit (a cached make timing or make area; a point
-    # without one is refused by the JVM with the command that makes one, and recorded as failed)
-    "CLOCK_MHZ": Knob("--clock-mhz", 'a number > 0, or "fmax" (the clock measured for the point\'s circuit)',
-                      lambda v: v == "fmax" or (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0), cost=False),
-}
+KNOBS, LEVEL_AWARE = _load()
+PRESETS = tuple(KNOBS["CONFIG"].domain["names"])
+POLICIES = tuple(KNOBS["NODE_POLICY"].domain["names"])
 
 
 def flags(config):

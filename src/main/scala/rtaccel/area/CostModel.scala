@@ -2,7 +2,7 @@ package rtaccel.area
 
 import java.nio.file.{Files, Path, Paths}
 import rtaccel.cache.hw.{CacheGeometry, CachePath}
-import rtaccel.config.PlatformParams
+import rtaccel.config.{Knobs, PlatformParams}
 import rtaccel.io.InputError
 
 /** The fast rung of the cost side (docs/area.md, "cost model"): FPGA resources of a configuration as a sum over
@@ -101,26 +101,12 @@ object CostModel {
                           familyScale: Map[String, Map[String, Double]], json: ujson.Obj) {
     /** Per-unit predictions (all instances of the unit) and instance counts for `p` on `fam`. */
     def predict(p: PlatformParams, fam: String): Seq[(String, Map[String, Double], Long)] = {
-      if (p.boxFormat != rtaccel.fp.FpFormat.fp32)
-        throw new InputError(s"the cost model is calibrated on fp32 boxes only; BOX_FORMAT=${p.boxFormat.name} needs FIDELITY=yosys")
-      if (p.triFormat != rtaccel.fp.FpFormat.fp32)
-        throw new InputError(s"the cost model is calibrated on the fp32 triangle pipe only; TRI_FORMAT=${p.triFormat.name} needs FIDELITY=yosys")
-      if (p.triTest != rtaccel.config.TriTest.Mt)
-        throw new InputError(s"the cost model is calibrated on the Möller–Trumbore pipe only; TRI_TEST=${p.triTest.name} needs FIDELITY=yosys")
-      // the fit has no NodeDecode or LeafAssembler term: a figure without them would be invented
-      if (p.nodeQuantBits > 0)
-        throw new InputError(s"the cost model is calibrated on full nodes only (no NodeDecode); NODE_FORMAT=${rtaccel.config.Numerics.nodeFormatName(p.nodeQuantBits)} needs FIDELITY=yosys")
-      if (p.primPacked)
-        throw new InputError("the cost model is calibrated on slot64 primitives only (no LeafAssembler); PRIM_FORMAT=packed needs FIDELITY=yosys")
-      // calibrated on the paper's request path: the two streams' job FIFOs, tagged job tables and hit queues, and the
-      // ray store's smaller arbiter have no term (docs/platform.md measures the store: 14k LUTs fewer)
-      if (p.respByPath)
-        throw new InputError(s"the cost model is calibrated on in-order answers only (RESP_ORDER=request); RESP_ORDER=${p.respOrder} needs FIDELITY=yosys")
-      if (p.rayStore)
-        throw new InputError("the cost model is calibrated on requests that carry their rays; RAY_STORE=1 needs FIDELITY=yosys")
-      // the fit has no term for the early accept and the write-first tag RAMs of one lookup per cycle
-      if (p.tagForward && (p.nodeCache.entries > 0 || p.primCache.entries > 0))
-        throw new InputError("the cost model is calibrated on tag pipelines of one lookup per two cycles; TAG_FORWARD=1 with a cache needs FIDELITY=yosys")
+      // the fit has a term only for what it was calibrated on (config.Knobs: each knob's calibrated values); a figure
+      // for anything else (a narrower box format, NodeDecode, the LeafAssembler, the path streams' FIFOs and tables,
+      // the ray store, forwarded tags, more channels or shared banks) would be invented
+      Knobs.uncalibrated(p).headOption.foreach { case (k, v) =>
+        throw new InputError(s"the cost model is calibrated on ${k.make}=${k.calibrated.get.values.mkString(" or ")} only; ${k.make}=$v needs FIDELITY=yosys")
+      }
       val scale = familyScale.getOrElse(fam, throw new InputError(
         s"the cost model has no calibration for family '$fam' (calibrated: ${familyScale.keys.toSeq.sorted.mkString(", ")}); use FIDELITY=yosys"))
       val extra = pipelineRegs(p, fam)

@@ -36,6 +36,7 @@ object Cli {
     * below what the scene needs: rays that need more are flagged overflow (see Cli.build).
     */
   def params(a: Args): PlatformParams = {
+    for (k <- rtaccel.config.Knobs.all; v <- a.opt(k.flag)) rtaccel.config.Knobs.check(k, v)
     val cfg = a.get("config", "fit")
     val preset = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
     // BOARD= brings its memory bandwidth and clock; MEM_GBPS= / CLOCK_MHZ= override either
@@ -84,10 +85,7 @@ object Cli {
     * for a message that names the command to run. */
   def makeArgs(a: Args): String = {
     val skip = Set("config", "board", "clock-mhz", "catalog", "node-bytes", "prim-bytes")
-    val knobs = Flags.platform.map(_.name).filterNot(skip).flatMap(n => a.opt(n).map { v =>
-      val name = if (n == "stack-depth") "STACK" else n.toUpperCase.replace('-', '_')
-      s"$name=$v"
-    })
+    val knobs = rtaccel.config.Knobs.all.filterNot(k => skip(k.flag)).flatMap(k => a.opt(k.flag).map(v => s"${k.make}=$v"))
     (s"CONFIG=${a.get("config", "fit")}" +: knobs).mkString(" ")
   }
 

@@ -16,31 +16,13 @@ object Flags {
     f("tris", "triangle file (N x 9 float32 .npy, from tools/tris)"),
     f("rays", "rays.npy (N x 8 float32)"),
     f("scene-label", "scene name recorded in outputs"))
-  /** Knobs of PlatformParams (Cli.params reads them; a preset's value is kept unless one is given). */
-  val model: Seq[Flag] = Seq(
-    f("config", "preset name or fit"), f("m", "MBVH width (2, 4, 8)"), f("mppl", "max primitives per leaf"),
-    f("tus", "traversal units"), f("ius", "intersection units, each with its own MC and caches serving TUS / IUS TUs (IUS=)"),
-    f("mem-channels", "address-interleaved DRAM channels, each an AXI4 master with MEM_GBPS of its own (MEM_CHANNELS=)"), f("stack-depth", "TU stack entries (STACK=)"),
-    f("resp-order", "MC response order: request (one stream in request order, the paper's) | path (node and primitive streams, each in its own order, so a hit never waits behind the other path's miss) | tagged (the two streams, each in any order, tagged by TU: hits under misses) (RESP_ORDER=)"),
-    f("ray-store", "1: each IU keeps its TUs' rays in a ray store written by the TC, requests carry the TU's index and not the ray; 0: the paper's (RAY_STORE=)"),
-    f("tag-forward", "1: every cache path's tags take one lookup per cycle (the set just written is forwarded to the next lookup); 0: one per two cycles (TAG_FORWARD=)"),
-    f("node-banks", "k >= 1: one node cache of NODE_CACHE entries shared by every IU, in k banks by the node id's low bits (needs RESP_ORDER=tagged); 0: a node cache per IU (NODE_BANKS=)"),
-    f("short-stack", "ring of that many entries with restart instead of the full stack (SHORT_STACK=)"),
-    f("box-format", "arithmetic of the ray-box test: fp32 | fp24 | bf16 | fp16 | e<E>m<M> | m<M> (BOX_FORMAT=; narrower ones round outward; m<M> fits the exponent to the scene)"),
-    f("tri-test", "ray-triangle test: mt (Moller-Trumbore, the paper's) | watertight (Woop et al. 2013) (TRI_TEST=)"),
-    f("tri-format", "arithmetic of Moller-Trumbore: fp32 | fp64 | e<E>m<M> with E >= 8, M >= 23 (TRI_FORMAT=; wider ones round t, u, v to fp32 at the end)"),
-    f("node-format", "node layout: full (6 fp32 planes per child), q<bits> (quantized planes, docs/numerics.md) or fit (the narrowest the scene needs) (NODE_FORMAT=)"),
-    f("prim-format", "primitive layout: slot64 (9 fp32 + id in 64 B) or packed (40 B records back to back, a beat-aligned row per leaf) (PRIM_FORMAT=)"),
-    f("node-bytes", "bytes per node fetch"), f("prim-bytes", "bytes per primitive fetch"),
-    f("board", "board of boards/catalog.json (BOARD=): its memory bandwidth and clock unless MEM_GBPS / CLOCK_MHZ are given"),
-    f("mem-gbps", "peak memory bandwidth in GB/s (MEM_GBPS=)"), f("clock-mhz", "platform clock in MHz (CLOCK_MHZ=)"),
-    f("pipeline", "register placement of the datapaths: auto (the LUT-level budget of the target clock on the board's family) | none (the fixed stages) | <levels> (PIPELINE=)"),
-    f("catalog", "board catalog file (default boards/catalog.json)"))
-  val cache: Seq[Flag] = Seq(
-    f("node-cache", "node cache entries (0 = none)"), f("node-ways", "node cache ways"),
-    f("node-policy", "node cache policy"), f("prim-cache", "primitive cache entries (0 = none)"),
-    f("prim-ways", "primitive cache ways"), f("prim-policy", "primitive cache policy"),
-    f("max-level", "MAX_LEVEL of the level replacement policy"))
+  /** Knobs of PlatformParams, from the registry (config.Knobs: Cli.params checks each value given against its
+    * domain; a preset's value is kept unless one is given): the tree, arithmetic, platform and memory knobs ... */
+  private def knob(k: rtaccel.config.Knobs.Knob) = f(k.flag, s"${k.help} (${k.make}=; ${k.domain.rule})")
+  private val cacheFlags = Set("node-cache", "node-ways", "node-policy", "prim-cache", "prim-ways", "prim-policy", "max-level")
+  val model: Seq[Flag] = rtaccel.config.Knobs.all.filterNot(k => cacheFlags(k.flag)).map(knob)
+  /** ... and the caches' */
+  val cache: Seq[Flag] = rtaccel.config.Knobs.all.filter(k => cacheFlags(k.flag)).map(knob)
   val platform: Seq[Flag] = model ++ cache
 
   val trace: Seq[Flag] = inputs ++ platform ++ Seq(f("out", "output folder"), f("access-trace", "1 writes trace.npy"),

@@ -134,7 +134,7 @@ class CostModelSpec extends AnyFunSuite {
     }
     // TAG_FORWARD=1 changes only cache paths: refused with a cache, nothing to refuse without one
     val (c6, o6, e6) = run(Area.main0, Flags.area, "--config", "small", "--fidelity", "model", "--tag-forward", "1", "--node-cache", "64", "--out", dir.resolve("g").toString)
-    assert(c6 == 2 && o6.isEmpty && e6.contains("TAG_FORWARD=1 with a cache needs FIDELITY=yosys"), e6)
+    assert(c6 == 2 && o6.isEmpty && e6.contains("TAG_FORWARD=1 needs FIDELITY=yosys"), e6)
   }
 
   test("make max-tus (model only): the answer fits, one more does not, a bigger board holds more; none fitting is exit 3") {
