@@ -8,7 +8,7 @@ import rtaccel.scene.{Normalize, Rays, Scene}
 
 /** Shared plumbing of the command-line entry points the Makefile calls. */
 object Cli {
-  val version: String = sys.props.getOrElse("rtaccel.version", "0.1.0")
+  val version: String = rtaccel.config.Version.current
 
   /** Runs a command body; user errors become one `error:` line and status 2 (returned for tests). */
   def status(args: Array[String], flags: Seq[Flags.Flag])(body: Args => Unit): Int =
@@ -103,7 +103,8 @@ object Cli {
     CacheParams(entries = entries, ways = ways, policy = pol, maxLevel = a.int("max-level", base.maxLevel))
   }
 
-  final case class Built(scene: Scene, params: PlatformParams, bvh: Mbvh, buildSeconds: Double)
+  type Built = rtaccel.config.Built
+  val Built: rtaccel.config.Built.type = rtaccel.config.Built
 
   /** Builds the tree and fits (or checks) the configuration. `stack` = an explicit STACK=, kept as given:
     * below the scene's bound it is a warning, not a refusal, so that overflow can be provoked and tested.

@@ -31,7 +31,7 @@ object EmitVerilog {
     * circuit they look up, often the same one again in one process (seconds of elaboration each time).
     */
   def emit(p: rtaccel.config.PlatformParams, out: java.nio.file.Path): Seq[java.nio.file.Path] = {
-    val key = Simulate.paramsDigest(p) // what shapes the circuit: not the preset's name, not a clock within the budget
+    val key = rtaccel.sim.PlatformRun.paramsDigest(p) // what shapes the circuit: not the preset's name, not a clock within the budget
     val kept = recent.synchronized(Option(recent.get(key)))
     kept match {
       case Some(texts) =>

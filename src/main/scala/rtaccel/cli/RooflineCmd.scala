@@ -58,7 +58,7 @@ object RooflineCmd {
     val points = list.zipWithIndex.map { case ((t, k), i) =>
       val b = Cli.build(scene, rays, base.copy(tus = t, ius = k), a)
       System.err.println(s"[roofline] $label: TUS=$t IUS=$k (${i + 1} of ${list.length}), ${rays.count} rays")
-      val o = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e, build = build))
+      val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(label, scaleExp = e, build = build))
       // a failed point stops the sweep before any CSV exists, so nothing downstream plots it
       if (!o.ok) { println(ujson.write(o.json)); throw new CheckFailed(o.failures.map(f => s"TUS=$t IUS=$k $f")) }
       val pt = point(o.json)

@@ -27,7 +27,7 @@ object SweepTus {
     val rows = tusList.map { t =>
       val b = Cli.build(scene, rays, base.copy(tus = t), a)
       System.err.println(s"[sweep] $label: TUs=$t")
-      val o = Simulate.run(b, rays, Simulate.SimOptions(label, scaleExp = e))
+      val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(label, scaleExp = e))
       // a failed point stops the sweep before any CSV exists, so nothing downstream plots it
       if (!o.ok) { println(ujson.write(o.json)); throw new CheckFailed(o.failures.map(f => s"TUS=$t $f")) }
       o.json

@@ -3,7 +3,7 @@ package rtaccel.area
 import java.nio.file.{Files, Paths}
 import org.scalatest.funsuite.AnyFunSuite
 import scala.util.Random
-import rtaccel.cli.{Area, Cli, CostFit, Flags, MaxTus}
+import rtaccel.cli.{Area, Cli, Flags, MaxTus}
 import rtaccel.config.{CacheParams, CachePolicy, Presets}
 
 /** The fitted cost model: block RAM tiling, the least-squares fit, the split of a synthesis into units, the

@@ -24,18 +24,18 @@ class SimulateSpec extends AnyFunSuite {
   test("the build key's digest changes with every circuit-shaping parameter (PIPELINE's budget too), not with the preset's name or a clock that keeps the budget") {
     import rtaccel.config.{CacheParams, CachePolicy, PlatformParams}
     val p = PlatformParams(tus = 4)
-    val d = Simulate.paramsDigest(p)
+    val d = rtaccel.sim.PlatformRun.paramsDigest(p)
     assert(d.matches("[0-9a-f]{10}"), d)
-    assert(Simulate.paramsDigest(PlatformParams(tus = 4)) == d) // stable: the same parameters, the same build
+    assert(rtaccel.sim.PlatformRun.paramsDigest(PlatformParams(tus = 4)) == d) // stable: the same parameters, the same build
     // 155 MHz leaves the Virtex-5 budget of 150 MHz (6 levels); 200 MHz makes it 4: another circuit
-    assert(Simulate.paramsDigest(p.copy(name = "mine", clockMhz = 155, clockSource = "routed")) == d)
-    assert(Simulate.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed, clockMhz = 300)) ==
-      Simulate.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed)))
+    assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(name = "mine", clockMhz = 155, clockSource = "routed")) == d)
+    assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed, clockMhz = 300)) ==
+      rtaccel.sim.PlatformRun.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed)))
     val changed = Seq(p.copy(rayStore = true), p.copy(tagForward = true), p.copy(nodeCache = CacheParams(64, 1, CachePolicy.Dm), respByPath = true, respTagged = true, nodeBanks = 2), p.copy(tus = 8), p.copy(hw = p.hw.copy(cacheHitQueue = 8)),
       p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lru)), p.copy(nodeCache = CacheParams(64, 2, CachePolicy.Lrp)),
       p.copy(boxFormat = rtaccel.fp.FpFormat(8, 7)), p.copy(triTest = rtaccel.config.TriTest.Watertight),
       p.copy(clockMhz = 200), p.copy(pipelining = rtaccel.config.Pipelining.Fixed), p.copy(pipelining = rtaccel.config.Pipelining.Levels(3)))
-    val ds = changed.map(Simulate.paramsDigest)
+    val ds = changed.map(rtaccel.sim.PlatformRun.paramsDigest)
     assert(!ds.contains(d) && ds.distinct.length == ds.length, ds)
   }
 

@@ -52,7 +52,7 @@ class PlatformSpec extends AnyFunSuite {
       respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward, nodeBanks = banks,
       pipelining = pipeline, family = family)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
-    val o = Simulate.run(b, rays, Simulate.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels-b$banks", memJitter = jitter, hostStall = stall,
+    val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels-b$banks", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec"))
     val j = o.json
     info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +

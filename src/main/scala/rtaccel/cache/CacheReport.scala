@@ -1,7 +1,6 @@
-package rtaccel.cli
+package rtaccel.cache
 
 import rtaccel.bvh.RefCodec
-import rtaccel.cache.{CacheCounts, CacheModel, ClusterSinks, Replay}
 import rtaccel.config.{CacheParams, PlatformParams}
 
 /** The `node_cache` / `prim_cache` objects of make simulate: the RTL's counters beside the trace model fed

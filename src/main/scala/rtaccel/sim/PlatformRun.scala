@@ -1,0 +1,256 @@
+package rtaccel.sim
+
+import java.nio.file.{Files, Path, Paths}
+import chisel3._
+import chiseltest._
+import chiseltest.internal.CachingAnnotation
+import chiseltest.simulator.VerilatorBackendAnnotation
+import firrtl2.options.TargetDirAnnotation
+import rtaccel.bvh.MemoryImage
+import rtaccel.config.{Numerics, PlatformParams}
+import rtaccel.io.InputError
+import rtaccel.mc.AxiParams
+import rtaccel.cache.CacheReport
+import rtaccel.cache.hw.CachePath
+import rtaccel.model.{AccessRecorder, AccessSink, MemFaults, RayStats, Traversal}
+import rtaccel.scene.{Hits, Rays}
+import rtaccel.host.{HostDriver, HostSession, ImageFile, RaysFile}
+
+/** One run of the platform RTL (Verilator) on rays, as make simulate, roofline and the tests do it: the simulator
+  * built (or found by its key), the memory image and rays driven through the register map as a host would, the hit
+  * stream read back and compared ray by ray with the reference model, the caches' counts with the trace model's, and
+  * the metrics JSON with its checks (cli.Simulate reads the flags and writes the files).
+  */
+object PlatformRun {
+  /** `vcd`: the whole run's trace when WAVES=1 (main0 cuts its window into OUT/waves.vcd). */
+  final case class Outcome(json: ujson.Obj, hits: Hits, vcd: Option[(Path, (Long, Long))] = None) {
+    def failures: Seq[String] = json("failures").arr.map(_.str).toSeq
+    def ok: Boolean = json("ok").bool
+  }
+
+  /** The checks of one run, each by the name it has in the JSON (README: "Checks are exit statuses"). */
+  def failures(j: ujson.Obj): Seq[String] = Seq(
+    "mismatch_vs_model" -> (j("mismatch_vs_model").num > 0), "lost" -> (j("lost").num > 0),
+    "duplicated" -> (j("duplicated").num > 0), "timeout" -> j("timed_out").bool,
+    "overflow_vs_model" -> (j("overflow_disagreements").num > 0),
+    "status_done" -> !j("status")("done").bool,
+    "status_read_error" -> (j("status")("read_error").bool != (j("read_errors").num > 0)),
+    "status_overflow" -> (j("status")("overflow").bool != (j("overflowed").num > 0)), "read_errors_vs_model" -> (j("read_error_disagreements").num > 0),
+    // null when there is no cache to compare
+    "cache_counts_match_model" -> (j("cache_counts_match_model") == ujson.False)).collect { case (n, true) => n }
+
+  /** Options of one run that do not change the platform. */
+  final case class SimOptions(label: String, memJitter: Int = 0, hostStall: Int = 0, seed: Int = 1,
+                              work: String = "build/sim", maxCycles: Option[Long] = None, scaleExp: Int = 0,
+                              memErrorRate: Double = 0.0, waves: Option[(Long, Long)] = None,
+                              build: Option[rtaccel.sim.VerilatorBuild] = None) { // None: VerilatorBuild.auto
+    val errorThreshold: Int = rtaccel.model.MemFaults.threshold(memErrorRate)
+  }
+
+  /** The hit stream as the host captured it, by ray id: each record, how often it came, its fault flags. */
+  final case class RtlHits(hits: Hits, seen: Array[Int], overflow: Array[Boolean], readError: Array[Boolean])
+
+  private def readHits(dut: SimHarness, received: Long, count: Int): RtlHits = {
+    val r = RtlHits(Hits.empty(count), new Array[Int](count), new Array[Boolean](count), new Array[Boolean](count))
+    for (k <- 0 until math.min(received, count.toLong).toInt) {
+      dut.io.readIdx.poke(k.U)
+      val w = dut.io.readData.peek().litValue
+      def word(i: Int) = ((w >> (32 * i)) & 0xffffffffL).toLong.toInt
+      val id = word(0)
+      if (id >= 0 && id < count) {
+        r.seen(id) += 1
+        r.hits.t(id) = java.lang.Float.intBitsToFloat(word(1)); r.hits.prim(id) = word(2)
+        r.hits.u(id) = java.lang.Float.intBitsToFloat(word(3)); r.hits.v(id) = java.lang.Float.intBitsToFloat(word(4))
+        r.overflow(id) = (word(5) & 1) != 0; r.readError(id) = (word(5) & 2) != 0
+      }
+    }
+    r
+  }
+
+  /** RTL against the model, ray by ray: raw bits of every field, and each fault flag against the model's record. */
+  final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int)
+
+  private def compare(rtl: RtlHits, model: Hits, flags: RayStats): Comparison = {
+    def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
+    val h = rtl.hits; val got = rtl.seen.indices.filter(rtl.seen(_) >= 1)
+    Comparison(
+      mismatch = got.count(i => h.prim(i) != model.prim(i) || bits(h.t(i)) != bits(model.t(i)) ||
+        bits(h.u(i)) != bits(model.u(i)) || bits(h.v(i)) != bits(model.v(i))),
+      lost = rtl.seen.count(_ == 0),
+      // each flag against the model's own flag: a ray that overflowed and read an error carries both
+      overflowDisagree = got.count(i => rtl.overflow(i) != flags.overflowRays(i)),
+      readErrorDisagree = got.count(i => rtl.readError(i) != flags.readErrorRays(i)))
+  }
+
+  /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
+    * build of its own instead of a stale one. The preset's name and where the clock came from shape no circuit, so they
+    * are left out.
+    */
+  def paramsDigest(p: PlatformParams): String =
+    // the clock and family shape the circuit only through PIPELINE's budget and (with one) the family's DSP block
+    // and delay chains, which are hashed in their place
+    java.security.MessageDigest.getInstance("SHA-256").digest((p.copy(name = "", clockMhz = 1, clockSource = "", family = "",
+      pipelineMhz = None).toString + s" budget ${p.stageBudget}" + p.stageBudget.fold("")(_ => s" dsp ${p.dspShape} ram ${p.delayRamCycles}")).getBytes("UTF-8"))
+      .take(5).map(b => f"${b & 0xff}%02x").mkString
+
+  /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
+  def run(b: rtaccel.config.Built, rays: Rays, o: SimOptions): Outcome = {
+    val p = b.params
+    CachePath.validate(p)
+    val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
+    val img = MemoryImage.pack(b.bvh, b.scene, p)
+    val axi = AxiParams.of(p)
+    val lay0 = ImageFile.layout(img, axi)
+    // the poisoned beats the DRAM model will answer with SLVERR (MEM_ERROR_RATE), known to the model
+    val faults = MemFaults(o.errorThreshold, o.seed, axi.beatBytes, p.nodeSlotBytes, lay0.primBaseBytes, p.primStrideBytes)
+    val tModel = System.nanoTime()
+    val stats = new RayStats
+    val rec = new AccessRecorder
+    val model = new Traversal(img, faults).traceAll(rays, if (cached) rec else AccessSink.none, stats)
+    val accessRows = rec.toArray
+    // the RTL logs its access order only when a cache is present; it makes exactly the model's accesses
+    val logCap = if (cached) SimSetup.capacity(accessRows.length / 5, SimSetup.minLogEntries) else 0
+    val label = o.label
+    val build = o.build.getOrElse(rtaccel.sim.VerilatorBuild.auto(rays.count))
+    val den = 1000
+    val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
+      bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
+    // One folder per simulator build: everything that changes the circuit is in its name.
+    val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
+    val rayCap = SimSetup.capacity(rays.count, SimSetup.minRays)
+    val wordCap = SimSetup.capacity((imageBytes + axi.beatBytes - 1) / axi.beatBytes, SimSetup.minImageBytes / axi.beatBytes)
+    val r = p.refs
+    val key = s"tus${p.tus}" + (if (p.ius > 1) s"-ius${p.ius}" else "") + (if (p.memChannels > 1) s"-ch${p.memChannels}.${p.hw.channelInterleaveBytes}" else "") + s"-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
+      s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
+      s"-jit${dram.randomExtraLatency}-stall${o.hostStall}-seed${o.seed}" + (if (o.errorThreshold > 0) s"-err${o.errorThreshold}" else "") +
+      (if (p.shortStack > 0) s"-short${p.shortStack}.${p.treeLevels}" else "") +
+      (if (p.boxFormat != rtaccel.fp.FpFormat.fp32) s"-box${p.boxFormat.name}" else "") +
+      (if (p.triTest != rtaccel.config.TriTest.Mt) s"-tri${p.triTest.name}" else "") +
+      (if (p.triFormat != rtaccel.fp.FpFormat.fp32) s"-tri${p.triFormat.name}" else "") +
+      (if (p.respByPath) s"-r${p.respOrder}" else "") + (if (p.rayStore) "-raystore" else "") + (if (p.tagForward) "-tagfwd" else "") + (if (p.nodeShared) s"-banks${p.nodeBanks}" else "") +
+      (if (p.primPacked) s"-packed${p.mppl}" else "") + // the leaf row (MPPL records) is a constant of the MC
+      (if (p.nodeQuantBits > 0) s"-node${Numerics.nodeFormatName(p.nodeQuantBits)}" else "") +
+      s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + // HwLimits: in the digest
+      (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "") +
+      s"-p${paramsDigest(p)}"
+    val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
+    Files.createDirectories(work)
+    val layout = ImageFile.write(img, axi, work.resolve("image.hex"))
+    require(layout.words <= wordCap, s"image of ${layout.words} words exceeds the simulator's $wordCap")
+    require(layout == lay0, "the image layout the model's fault map assumed differs from the one written")
+    RaysFile.write(rays, work.resolve("rays.hex"))
+    val setup = SimSetup(rayCap, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
+      wordCap, dram, hostStallPercent = o.hostStall, seed = o.seed, accessLogCapacity = logCap)
+    val maxCycles = o.maxCycles.getOrElse(1000000L + 200000L * rays.count)
+    System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build (${build.name}) in $work")
+
+    var result: Outcome = null
+    val t0 = System.nanoTime()
+    val modelWall = (t0 - tModel) / 1e9 // the reference model, the memory image and the input files
+    RawTester.test(new SimHarness(p, setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
+      CachingAnnotation) ++ build.annotations ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
+      dut.clock.setTimeout(0)
+      dut.io.readIdx.poke(0.U)
+      dut.io.rayCount.poke(rays.count.U) // what the host's stream holds
+      // The host driver's sequence (docs/registers.md, "Driver contract"): the image is in DRAM already.
+      val host = new HostDriver(dut.io.lite, dut.clock)
+      host.idle()
+      val regs = HostSession.configure(host, p, layout.primBaseBytes, rays.count)
+      // CPU time of this thread (the model steps in it): cycles per CPU second hardly move with the machine's load
+      val threads = java.lang.management.ManagementFactory.getThreadMXBean
+      val cpuSim = threads.getCurrentThreadCpuTime
+      val tSim = System.nanoTime()
+      var stepped = 0L
+      val chunk = 20000
+      var lastReport = System.nanoTime()
+      while (!dut.io.irq.peek().litToBoolean && stepped < maxCycles) {
+        val n = math.min(chunk.toLong, maxCycles - stepped).toInt // the cycle limit is exact
+        dut.clock.step(n); stepped += n
+        if (System.nanoTime() - lastReport > 5e9) {
+          System.err.println(f"[simulate] ${stepped / 1e6}%.1fM cycles, ${dut.io.received.peek().litValue}/${rays.count} hits")
+          lastReport = System.nanoTime()
+        }
+      }
+      dut.clock.step(256) // a hit beyond the batch would show up here as a duplicate
+      val tEnd = System.nanoTime()
+      val simWall = (tEnd - tSim) / 1e9
+      val simCpu = (threads.getCurrentThreadCpuTime - cpuSim) / 1e9
+      val received = dut.io.received.peek().litValue.toLong
+      val finish = HostSession.finish(host)
+      val counters = finish.counters
+      val cycles = counters("batch_cycles")
+      val rtl = readHits(dut, received, rays.count)
+      val hits = rtl.hits
+      val tHits = System.nanoTime()
+      val cmp = compare(rtl, model, stats)
+      import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree}
+      val (rtlOverflow, rtlReadError) = (rtl.overflow, rtl.readError)
+      // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
+      // and against the model's N-TU interleaved order (the fast model's prediction)
+      // one log per IU cluster, each the order its own caches saw
+      val logged = if (!cached) Seq.fill(p.memControllers)(Array.empty[Int]) else Seq.tabulate(p.memControllers) { c =>
+        val nLog = dut.io.logCount(c).peek().litValue.toInt
+        if (nLog > logCap) throw new InputError(s"the RTL made $nLog accesses, more than the model's ${accessRows.length / 5}")
+        val w = SimSetup.logWords; val a = new Array[Int](nLog)
+        for (row <- 0 until (nLog + w - 1) / w) {
+          dut.io.readIdx.poke(row.U); val bits = dut.io.logData(c).peek().litValue
+          for (k <- 0 until math.min(w, nLog - row * w)) a(row * w + k) = ((bits >> (32 * k)) & 0xffffffffL).toLong.toInt
+        }
+        a
+      }
+      val tLog = System.nanoTime()
+      val cacheJson = CacheReport.simulate(p, counters, logged, accessRows, img.codec)
+      System.err.println(f"[simulate] readout: hits ${(tHits - tEnd) / 1e9}%.1f s, access log ${(tLog - tHits) / 1e9}%.1f s " +
+        f"(${logged.map(_.length).sum} entries), cache check ${(System.nanoTime() - tLog) / 1e9}%.1f s")
+      val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
+      val n = rays.count.toDouble
+      val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
+      val json = ujson.Obj(
+        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "clock_source" -> p.clockSource, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
+        "pipeline" -> rtaccel.config.Pipelining.json(p),
+        "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
+        "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,
+        "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
+        // packed: the MC's requested bytes less the nodes' (leafBytes per leaf, whole beats)
+        "prim_bytes_per_ray" -> (if (p.primPacked) (counters("mem_bytes") - counters("node_requests") * p.nodeStrideBytes).toDouble
+          else (counters("prim_requests") * p.primAccessBytes).toDouble) / n,
+        "mem_utilisation" -> counters("mem_busy_beats") * axi.beatBytes / (math.max(1, cycles) * peakBytesPerCycle),
+        "sim_cycles_per_wall_s" -> stepped / simWall, "sim_wall_s" -> simWall, "sim_build" -> build.name,
+        "sim_cycles_per_cpu_s" -> stepped / math.max(1e-9, simCpu), "sim_cpu_s" -> simCpu,
+        // where the wall time went: model + inputs, simulator build (or cache load) + host setup, the run, readout and checks
+        "wall_model_s" -> modelWall, "wall_build_s" -> (tSim - t0) / 1e9, "wall_readout_s" -> (System.nanoTime() - tEnd) / 1e9,
+        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "resp_order" -> p.respOrder, "ray_store" -> p.rayStore, "tag_forward" -> p.tagForward, "node_banks" -> p.nodeBanks, "m" -> p.m, "mppl" -> p.mppl,
+        "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "model_restarts" -> stats.restarts.toDouble, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
+        "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
+        "overflow_disagreements" -> overflowDisagree, "read_errors" -> rtlReadError.count(identity),
+        "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,
+        "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
+        "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
+        "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,
+        "timed_out" -> (received < rays.count || !finish.irqDone), "normalize_exponent" -> o.scaleExp,
+        "mem_jitter" -> dram.randomExtraLatency, "host_stall_percent" -> setup.hostStallPercent,
+        "counters" -> ujson.Obj.from(counters.map { case (k, v) => k -> ujson.Num(v.toDouble) }),
+        "status" -> finish.statusJson, "irq_done" -> finish.irqDone,
+        "dram_bytes_per_ray" -> counters("mem_busy_beats") * axi.beatBytes / n,
+        "node_cache" -> cacheJson.node, "prim_cache" -> cacheJson.prim, "cache_counts_match_model" -> cacheJson.matches,
+        // per IU cluster: the accesses its MC accepted (logged with a cache only): how the TC balanced the clusters
+        "cluster_accesses" -> (if (cached) ujson.Arr.from(logged.take(p.ius).map(l => ujson.Num(l.length))) else ujson.Null),
+        // NODE_BANKS: the node references each bank of the shared node cache accepted (how evenly the ids spread)
+        "bank_accesses" -> (if (cached && p.nodeShared) ujson.Arr.from(logged.drop(p.ius).map(l => ujson.Num(l.length))) else ujson.Null),
+        "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> rtaccel.config.Version.current)
+      json("roofline") = if (rays.count == 0 || cycles == 0) ujson.Null // docs/roofline.md
+        else rtaccel.perf.Roofline.of(p, rtaccel.perf.Roofline.Run.fromCounters(rays.count, counters)).json
+      val failed = failures(json)
+      json("ok") = failed.isEmpty; json("failures") = ujson.Arr.from(failed.map(ujson.Str(_)))
+      result = Outcome(json, hits)
+    }
+    if (result == null) throw new InputError("simulation did not complete")
+    o.waves match {
+      case Some(win) =>
+        val vcds = Files.walk(work.resolve("rtl")).toArray.map(_.asInstanceOf[Path]).filter(_.toString.endsWith(".vcd"))
+        if (vcds.isEmpty) throw new InputError(s"WAVES=1 but the simulator wrote no VCD under $work/rtl")
+        result.copy(vcd = Some(vcds.maxBy(f => Files.getLastModifiedTime(f).toMillis) -> win))
+      case None => result
+    }
+  }
+}
