@@ -50,11 +50,15 @@ object Slice {
     */
   def late[T <: Data](p: PlatformParams, x: T): T = if (p.stageBudget.isDefined) RegNext(x, 0.U.asTypeOf(x)) else x
 
-  /** A job stream that never stalls, a cycle late through a register with PIPELINE (the bits load only with a job). */
+  /** A job stream that never stalls, a cycle late through a register with PIPELINE. The bits load every cycle and
+    * are read only with their valid: a load enable would be the valid's fan-out to every bit of a wide job, which
+    * routed as the smallest platform's critical path on ECP5 (the IU's job queue pointers through the valid to
+    * the box pipe's input register, docs/timing.md).
+    */
   def late[T <: Data](p: PlatformParams, j: Valid[T]): Valid[T] = if (p.stageBudget.isEmpty) j else {
     val r = Wire(Valid(chiselTypeOf(j.bits)))
     r.valid := RegNext(j.valid, false.B)
-    r.bits := RegEnable(j.bits, j.valid)
+    r.bits := RegNext(j.bits)
     r
   }
 }
