@@ -1,6 +1,7 @@
 """The Makefile's knobs are the registry's export (config/knobs.json): every knob reaches the commands that read it
 with its flag, a knob given to a command that does not read it is refused, and dse/ judges values by the same rule."""
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -27,8 +28,12 @@ def legal(domain):
     return {"board": "ecp5-85", "file": "boards/catalog.json"}[kind]
 
 
+# as a user's make, not a sub-make of `make test` (whose MAKELEVEL and MAKEFLAGS would reach it)
+TOP = {k: v for k, v in os.environ.items() if k not in ("MAKELEVEL", "MAKEFLAGS", "MFLAGS")}
+
+
 def make(*args):
-    return subprocess.run(["make", "-n", "--no-print-directory", *args], capture_output=True, text=True, cwd=ROOT)
+    return subprocess.run(["make", "-n", "--no-print-directory", *args], capture_output=True, text=True, cwd=ROOT, env=TOP)
 
 
 def test_every_knob_a_command_reads_reaches_it_with_its_flag():
@@ -53,7 +58,7 @@ def test_a_knob_given_to_a_command_that_does_not_read_it_is_refused(knob):
 
 def test_the_entry_point_gives_the_same_refusal_with_status_2():
     r = subprocess.run([sys.executable, str(ROOT / "rtaccel"), "trace", "SCENE=x", "NODE_CACHE=64"], capture_output=True,
-                       text=True, cwd=ROOT)
+                       text=True, cwd=ROOT, env=TOP)
     assert r.returncode == 2 and "NODE_CACHE=64 has no effect on make trace" in r.stderr, r.stderr
 
 
