@@ -70,8 +70,10 @@ yosys:
 	@command -v yosys >/dev/null || { echo "[deps] installing yosys from apt"; \
 	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq yosys >/dev/null; }
 
-# z3 runs the bounded proofs of src/test/scala/**/*FormalSpec.scala (docs/formal.md) in make test and make regress.
-# the formal specs' solvers (docs/formal.md): z3 for most checks, CVC4 for the tagged cache path's
+# The bounded proofs of src/test/scala/**/*FormalSpec.scala (docs/formal.md) run on Yices 2 (yices-smt2, in the venv
+# from requirements.txt). z3 and CVC4 from apt only to compare engines: RTACCEL_FORMAL_ENGINE=z3|cvc4 make regress.
+# The test JVM finds yices-smt2 on PATH.
+TEST_PATH = PATH=$(ROOT)/.venv/bin:$$PATH
 z3:
 	@command -v z3 >/dev/null && command -v cvc4 >/dev/null || { echo "[deps] installing z3 and cvc4 from apt"; \
 	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq z3 cvc4 >/dev/null; }
@@ -267,8 +269,8 @@ soak: deps build/scenes/cornell.obj
 	    MEM_JITTER=$(or $(MEM_JITTER),23) HOST_STALL=$(or $(HOST_STALL),20) OUT=build/soak/simulate
 # Every suite with every variant (rtaccel.Regress.full): make test's cases and the ones it leaves out. REGRESS_ONLY=
 # names suites to run alone, e.g. REGRESS_ONLY="rtaccel.top.PlatformSpec rtaccel.iu.IuPipesSpec".
-regress: deps yosys z3 fixtures
-	RTACCEL_REGRESS=full RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) $(if $(REGRESS_ONLY),"testOnly $(REGRESS_ONLY)",test)
+regress: deps yosys fixtures
+	$(TEST_PATH) RTACCEL_REGRESS=full RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) $(if $(REGRESS_ONLY),"testOnly $(REGRESS_ONLY)",test)
 
 # Paper Figs 12-13 without cache: rays/s and memory utilisation vs TUs (CSV + PNG in build/paper-nocache).
 NOCACHE_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
@@ -375,10 +377,10 @@ $(FIXTURES): $(wildcard scenes/*.py golden/*.py) | venv
 	  $(PY) -m golden.export --scene $$d/scene.obj --out $$d/golden --width 32 --height 24 --depth 3 --seed 7 >/dev/null; done
 	touch $@
 
-test: deps yosys z3 fixtures
+test: deps yosys fixtures
 	@rm -rf build/test-reports; mkdir -p build/test-reports/python
 	@rc=0; \
-	RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=3; \
+	$(TEST_PATH) RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=3; \
 	RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
 	  $(PY) -m pytest -q --junitxml=build/test-reports/python/pytest.xml || rc=3; \
 	$(PY) tools/count_tests.py build/test-reports; exit $$rc

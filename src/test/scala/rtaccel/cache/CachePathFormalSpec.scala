@@ -53,12 +53,12 @@ class CachePathFormalSpec extends AnyFlatSpec with FormalChecks {
   for ((name, c, quick, deep) <- taggedConfigs if regress || quick > 0) {
     val d = if (regress) deep else quick
     it should s"answer each tagged request once, back to back, with the memory's data, within $answerBound cycles, in any order: $name" in
-      prove(new CachePathFormal(c, live, answerBound, tagged = true), d, cvc4)
+      prove(new CachePathFormal(c, live, answerBound, tagged = true), d)
   }
   // (a lost `last` needs a longer trace than depth 8 to show: it is refuted on the in-order path above)
   for (bug <- Seq(PathBug.Spurious, PathBug.Corrupt))
     it should s"find a counterexample to a ${bug.name} with tagged answers" in
-      refute(new CachePathFormal(dm, live, answerBound, bug, tagged = true), CachePathFormalSpec.taggedDepth, cvc4)
+      refute(new CachePathFormal(dm, live, answerBound, bug, tagged = true), CachePathFormalSpec.taggedDepth)
 }
 
 object CachePathFormalSpec {

@@ -23,7 +23,9 @@ class PlatformSpec extends AnyFunSuite {
   private val grid: Seq[(Int, Int, Seq[Int], Pipelining, String)] =
     if (full) (for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16), Pipelining.Auto, "xc5v")) ++
       Seq((4, 2, Seq(2), Pipelining.Fixed, "xc5v"), (2, 4, Seq(4), Pipelining.Levels(3), "xc5v"), (2, 4, Seq(4), Pipelining.Auto, "ecp5"))
-    else Seq((1, 4, Seq(1), Pipelining.Auto, "xc5v"), (1, 4, Seq(16), Pipelining.Auto, "ecp5"), (4, 2, Seq(2), Pipelining.Fixed, "xc5v"))
+    // make test: one TU with the longest leaves on ecp5's circuit, four TUs with one primitive per leaf at the fixed
+    // stages; every other case of make test runs the Virtex-5 circuit at auto
+    else Seq((1, 4, Seq(16), Pipelining.Auto, "ecp5"), (4, 2, Seq(1), Pipelining.Fixed, "xc5v"))
 
   private val scene = TestScenes.soup(31, 400)
   private val rays = {
@@ -268,7 +270,7 @@ class PlatformSpec extends AnyFunSuite {
   // RESP_ORDER=path and tagged (docs/platform.md): node and leaf responses in two streams (tagged: each in any
   // order, hits under misses); bit-exact, and the caches' counts still equal the model replaying the RTL's own
   // order. make test: IUS=2 over MEM_CHANNELS=2 with caches under jitter and backpressure for path (the clusters and
-  // channels case of make test too); tagged in the RAY_STORE and NODE_BANKS cases below.
+  // channels case of make test too); tagged in the NODE_BANKS case below (with RAY_STORE=1).
   private val (path, tagged) = (RespOrder.Path, RespOrder.Tagged)
   private val pathCases = Seq((path, 2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
     (if (!full) Nil else Seq((tagged, 1, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30),(path, 1, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
@@ -285,9 +287,10 @@ class PlatformSpec extends AnyFunSuite {
   // RAY_STORE=1 (docs/platform.md, "Ray store"): the rays wait in each cluster's store instead of travelling with
   // every request; nothing else changes, so the run is bit-exact and (make regress) takes the very same cycles as
   // without the store. make test: two clusters (the TC's write goes to the right cluster's store), tagged, caches,
-  // and TAG_FORWARD=1 in the same circuit (one lookup per cycle: docs/caches.md); make regress the store alone too.
-  private val storeCases = Seq((tagged, 2, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true)) ++
-    (if (!full) Nil else Seq((RespOrder.Request, 1, 4, CacheParams(), CacheParams(), 17, 20, false),
+  // and TAG_FORWARD=1 in the NODE_BANKS case's circuit below (one lookup per cycle: docs/caches.md); make regress
+  // each of these and the store alone.
+  private val storeCases = if (!full) Nil else Seq((tagged, 2, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true)) ++
+    (Seq((RespOrder.Request, 1, 4, CacheParams(), CacheParams(), 17, 20, false),
       (tagged, 2, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25, false)))
   for ((order, ius, tus, node, prim, jitter, stall, fwd) <- storeCases)
     test(s"RAY_STORE=1, RESP_ORDER=$order, IUS=$ius${if (fwd) ", TAG_FORWARD=1" else ""} at $tus TUs (node ${node.entries}, prim ${prim.entries}, jitter $jitter, stall $stall): " +
@@ -303,17 +306,18 @@ class PlatformSpec extends AnyFunSuite {
 
   // NODE_BANKS=k (docs/caches.md, "Shared node cache"): one node cache for every cluster, in banks behind a crossbar;
   // the banks' counts equal the banked trace model replaying each bank's own order, and the platform stays bit-exact.
-  // make test: two clusters on two banks with one lookup per cycle, jitter and backpressure; make regress: more banks
-  // than clusters (hybrid), one bank for four clusters, two memory channels.
-  private val bankCases = Seq((2, 2, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true)) ++
-    (if (!full) Nil else Seq((2, 4, 1, 8, CacheParams(128, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(16, 2, CachePolicy.Lru), 23, 30, false),
-      (4, 1, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 0, 0, true),
-      (2, 2, 2, 4, CacheParams(64, 2, CachePolicy.Lru), CacheParams(32, 1, CachePolicy.Dm), 17, 20, false)))
-  for ((ius, banks, ch, tus, node, prim, jitter, stall, fwd) <- bankCases)
-    test(s"NODE_BANKS=$banks shared by IUS=$ius${if (ch > 1) s", MEM_CHANNELS=$ch" else ""}${if (fwd) ", TAG_FORWARD=1" else ""} at $tus TUs (node ${node.entries} ${node.policy}, " +
+  // make test: two clusters on two banks with one lookup per cycle and the rays in the clusters' stores (RAY_STORE=1:
+  // the TC's write goes to the right cluster's store), jitter and backpressure; make regress: more banks than
+  // clusters (hybrid), one bank for four clusters, two memory channels, each without the store.
+  private val bankCases = Seq((2, 2, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true, !full)) ++
+    (if (!full) Nil else Seq((2, 4, 1, 8, CacheParams(128, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(16, 2, CachePolicy.Lru), 23, 30, false, false),
+      (4, 1, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 0, 0, true, false),
+      (2, 2, 2, 4, CacheParams(64, 2, CachePolicy.Lru), CacheParams(32, 1, CachePolicy.Dm), 17, 20, false, false)))
+  for ((ius, banks, ch, tus, node, prim, jitter, stall, fwd, store) <- bankCases)
+    test(s"NODE_BANKS=$banks shared by IUS=$ius${if (ch > 1) s", MEM_CHANNELS=$ch" else ""}${if (fwd) ", TAG_FORWARD=1" else ""}${if (store) ", RAY_STORE=1" else ""} at $tus TUs (node ${node.entries} ${node.policy}, " +
         s"prim ${prim.entries}, jitter $jitter, stall $stall): bit-exact, bank counts equal the banked model") {
-      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch, order = tagged, forward = fwd, banks = banks).json
-      assert(j("node_banks").num == banks, ujson.write(j))
+      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch, order = tagged, forward = fwd, banks = banks, rayStore = store).json
+      assert(j("node_banks").num == banks && j("ray_store").bool == store && j("tag_forward").bool == fwd, ujson.write(j))
       checkClusters(j, ius, ch, node, prim, banks)
       // the clusters' MCs saw only leaves: every node reference went through a bank
       assert(j("cluster_accesses").arr.map(_.num).sum == j("counters")("leaf_requests").num, ujson.write(j))
