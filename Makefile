@@ -97,7 +97,7 @@ run: deps build/scenes/cornell.obj
 	@set -o pipefail; $(MAKE) --no-print-directory check SCENE=$(SCENE) GOLDEN=build/run/golden | tee build/run/check.log
 	@set -o pipefail; $(MAKE) --no-print-directory analyze SCENE=$(SCENE) GOLDEN=build/run/golden OUT=build/run/analysis | tee build/run/analyze.log
 	@set -o pipefail; $(MAKE) --no-print-directory simulate SCENE=$(SCENE) GOLDEN=build/run/golden CONFIG=$(RUN_CONFIG) NODE_CACHE=$(RUN_NODE_CACHE) OUT=build/run/simulate | tee build/run/simulate.log
-	@$(PY) -m dse.run_summary build/run
+	@$(PY) -m dse.studies.run_summary build/run
 
 # ---------------------------------------------------------------- user commands
 golden: venv
@@ -131,7 +131,7 @@ analyze: deps
 	@OUT=$${OUT:-build/analyze/$$(basename $(SCENE))}; G=$(GOLDEN); \
 	  if [ -z "$$G" ]; then G=$$OUT/golden; $(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=$$G >&2 || exit $$?; fi; \
 	  T=$(TRIS) && $(JAVA) rtaccel.cli.Analyze --tris "$$T" --scene-label $(SCENE) --rays $$G/rays.npy --out $$OUT $(MODEL_ARGS) && \
-	  $(PY) -m dse.plot_analysis $$OUT >&2 && echo "[analyze] CSV and PNG in $$OUT" >&2
+	  $(PY) -m dse.plots.analysis $$OUT >&2 && echo "[analyze] CSV and PNG in $$OUT" >&2
 
 # Every numerics option on one set of rays (docs/numerics.md, "The trade, measured"): accuracy against Embree and
 # the fp32 baseline, lost hits, traversal work, DRAM bytes per ray, RTL rays/s (PRECISION_RTL=0 skips it) and the
@@ -147,7 +147,7 @@ precision: deps
 	@test -f "$(SCENE)" || { echo "error: scene '$(SCENE)' not found; give SCENE=<path to .obj or .ply>" >&2; exit 2; }
 	@OUT=$${OUT:-build/precision/$$(basename $(SCENE) | sed 's/\.[a-z]*$$//')}; G=$(GOLDEN); mkdir -p $$OUT; \
 	  if [ -z "$$G" ]; then G=$$OUT/golden; [ -f $$G/rays.npy ] || $(MAKE) --no-print-directory golden SCENE=$(SCENE) OUT=$$G >&2 || exit $$?; fi; \
-	  T=$(TRIS) && $(PY) -m dse.precision --scene $(SCENE) --tris "$$T" --golden $$G --out $$OUT --java '$(JAVA)' \
+	  T=$(TRIS) && $(PY) -m dse.studies.precision --scene $(SCENE) --tris "$$T" --golden $$G --out $$OUT --java '$(JAVA)' \
 	    --knobs "$(MODEL_ARGS)" --options "$(PRECISION_OPTIONS)" --rtl $(PRECISION_RTL) --area $(PRECISION_AREA) \
 	    --exhaustive $(PRECISION_EXHAUSTIVE) $(call knob_flags,BOARD)
 
@@ -166,7 +166,7 @@ bench: deps
 	  T=$$(tools/tris $$s); \
 	  $(JAVA) rtaccel.cli.Bench --tris "$$T" --scene-label $$s --rays $$G/rays.npy $(MODEL_ARGS) > build/bench/$$n/model.json || exit $$?; \
 	  $(PY) -m golden.bench --scene $$s --rays $$G/rays.npy > build/bench/$$n/embree.json || exit $$?; \
-	  $(PY) -m dse.bench_table $$n build/bench/$$n/model.json build/bench/$$n/embree.json; \
+	  $(PY) -m dse.studies.bench_table $$n build/bench/$$n/model.json build/bench/$$n/embree.json; \
 	done
 
 # The cache model against the RTL on the same rays and caches at BENCH_CACHE_TUS (docs/caches.md): miss rates,
@@ -181,7 +181,7 @@ bench-caches: deps
 	      | tail -n 1 > $$d/sim-tu$$t.json || exit $$?; \
 	    $(MAKE) --no-print-directory cachesim SCENE=$$s GOLDEN=$$G CONFIG=paper2017 TUS=$$t NODE_CACHE=$(BENCH_NODE_CACHE) EXTRA_CACHESIM="--repeat 5" \
 	      | tail -n 1 > $$d/model-tu$$t.json || exit $$?; done; \
-	  $(PY) -m dse.bench_caches $$d/bench.csv $$n $$d || exit $$?; done
+	  $(PY) -m dse.studies.bench_caches $$d/bench.csv $$n $$d || exit $$?; done
 
 # ---------------------------------------------------------------- RTL
 VCONFIG = $(if $(filter fit,$(CONFIG)),paper2017,$(CONFIG))
@@ -257,7 +257,7 @@ roofline: deps
 	  J=$$($(JAVA) rtaccel.cli.RooflineCmd --tris "$$T" --scene-label $$s --rays $$G/rays.npy --out $$OUT $(MODEL_ARGS) \
 	    $(if $(strip $(ROOFLINE_TUS)),--tus-list "$(strip $(ROOFLINE_TUS))") $(if $(strip $(ROOFLINE_IUS)),--ius-list "$(strip $(ROOFLINE_IUS))") $(if $(SIM_BUILD),--sim-build $(SIM_BUILD)) | tail -n 1; exit $${PIPESTATUS[0]}); rc=$$?; \
 	  if [ $$rc -ne 0 ]; then [ -z "$$J" ] || echo "$$J"; exit $$rc; fi; \
-	  $(PY) -m dse.plot_roofline $$OUT/roofline.png $$OUT/roofline.csv || exit $$?; echo "$$J"
+	  $(PY) -m dse.plots.roofline $$OUT/roofline.png $$OUT/roofline.csv || exit $$?; echo "$$J"
 
 # At least RAYS_N rays (a 1000-wide camera frame of the embedded room) through the RTL in one run, with random
 # DRAM latency and host backpressure: 0 lost, 0 duplicated, 0 mismatches, or exit 3. A benchmark, not a test.
@@ -283,11 +283,11 @@ paper-nocache: deps
 	  d=build/paper-nocache/$$n; \
 	  T=$$(tools/tris $$s); $(JAVA) rtaccel.cli.SweepTus --tris "$$T" --scene-label $$s --rays $$d/golden/rays.npy --out $$d \
 	    --config paper2017 --node-cache 0 $(call knob_flags,M MPPL) --tus-list $(NOCACHE_TUS) || exit $$?; csvs="$$csvs $$d/tus_sweep.csv"; done; \
-	  [ -z "$$csvs" ] || $(PY) -m dse.plot_tus build/paper-nocache/tus_sweep.png $$csvs
+	  [ -z "$$csvs" ] || $(PY) -m dse.plots.tus build/paper-nocache/tus_sweep.png $$csvs
 
 # Paper Figs 11 (node-cache miss rate vs size) and 8-9 (DRAM bytes per ray vs MPPL) from the cache model, and
 # Figs 12-13 with the 2^13-entry DM node cache from the RTL (slow; skip with PAPER_TUS=). CSV + PNG per scene in
-# build/paper-caches/<scene>/, combined PNGs in build/paper-caches/ (dse/paper_caches.py, docs/caches.md).
+# build/paper-caches/<scene>/, combined PNGs in build/paper-caches/ (dse/paper/caches.py, docs/caches.md).
 # SCENE=<mesh> on the command line runs just that scene. The golden rays are kept per resolution, depth and seed
 # in <scene>/golden/ and remade only when absent or older than the mesh.
 PAPER_SCENES ?= $(SHARED_SCENES)/sponza_dabrovic.obj $(SHARED_SCENES)/conference.obj
@@ -305,18 +305,18 @@ paper-caches: deps
 	  GT=$$d/golden/$(PAPER_TUS_WIDTH)x$(PAPER_TUS_HEIGHT)-d$(DEPTH)-s$(SEED); \
 	  [ -z "$(PAPER_TUS)" ] || [ "$$GT/rays.npy" -nt "$$s" ] || $(MAKE) --no-print-directory golden SCENE=$$s OUT=$$GT WIDTH=$(PAPER_TUS_WIDTH) HEIGHT=$(PAPER_TUS_HEIGHT) >/dev/null || exit $$?; \
 	  T=$$(tools/tris $$s) || exit $$?; \
-	  $(PY) -m dse.paper_caches --scene $$s --tris "$$T" --rays $$G/rays.npy $$( [ -z "$(PAPER_TUS)" ] || echo --tus-rays $$GT/rays.npy) --out $$d --java '$(JAVA)' $(call knob_flags,M MPPL) \
+	  $(PY) -m dse.paper.caches --scene $$s --tris "$$T" --rays $$G/rays.npy $$( [ -z "$(PAPER_TUS)" ] || echo --tus-rays $$GT/rays.npy) --out $$d --java '$(JAVA)' $(call knob_flags,M MPPL) \
 	    --tus-list "$(PAPER_TUS)" --nocache-csv build/paper-nocache/$$n/tus_sweep.csv || exit $$?; \
 	  f11="$$f11 $$d/fig11_miss_rate.csv"; f89="$$f89 $$d/fig8_9_bytes_per_ray.csv"; \
 	  [ -z "$(PAPER_TUS)" ] || tus="$$tus $$d/tus_sweep.csv $$( [ -f build/paper-nocache/$$n/tus_sweep.csv ] && echo build/paper-nocache/$$n/tus_sweep.csv)"; done; \
-	  [ -z "$$f11" ] || { $(PY) -m dse.plot_caches fig11 build/paper-caches/fig11_miss_rate.png $$f11 && \
-	    $(PY) -m dse.plot_caches bytes build/paper-caches/fig8_9_bytes_per_ray.png $$f89; } || exit $$?; \
-	  [ -z "$$tus" ] || $(PY) -m dse.plot_tus build/paper-caches/fig12_13_tus.png $$tus
+	  [ -z "$$f11" ] || { $(PY) -m dse.plots.caches fig11 build/paper-caches/fig11_miss_rate.png $$f11 && \
+	    $(PY) -m dse.plots.caches bytes build/paper-caches/fig8_9_bytes_per_ray.png $$f89; } || exit $$?; \
+	  [ -z "$$tus" ] || $(PY) -m dse.plots.tus build/paper-caches/fig12_13_tus.png $$tus
 
 # The paper reproduced (docs/results.md "make paper"): Figs 4, 5-6, 8, 9, 11, 12-13 with and without cache, Table 2
 # and Fig 15 on SCENES, each of our numbers beside the paper's, in OUT/report.md (default build/paper) with its
 # PNGs. Runs paper-nocache, paper-caches, analyze, roofline (Table 2: paper2017, PAPER_TABLE2_TUS, 2^13 DM, at
-# 150 MHz and again at CLOCK_MHZ=fmax after make area of that circuit) and bench per scene (dse/paper.py); a rerun
+# 150 MHz and again at CLOCK_MHZ=fmax after make area of that circuit) and bench per scene (dse/paper/paper.py); a rerun
 # reuses every step whose outputs are unchanged (OUT/paper.sqlite). PAPER_TUS="" skips the TU sweeps,
 # PAPER_TABLE2_TUS=0 the Table 2 RTL runs, PAPER_TABLE2_FMAX=0 the reached-clock run, PAPER_BENCH=0 Embree; MACHINE_GBPS
 # sets this machine's bandwidth for Fig 15 (default: measured). Absent scenes are skipped; none: the embedded room.
@@ -325,7 +325,7 @@ PAPER_TABLE2_TUS ?= 32
 PAPER_TABLE2_FMAX ?= 1
 PAPER_BENCH ?= 1
 paper: deps build/scenes/cornell.obj
-	@$(PY) -m dse.paper --scenes "$(SCENES)" --fallback build/scenes/cornell.obj --out $(or $(OUT),build/paper) \
+	@$(PY) -m dse.paper.paper --scenes "$(SCENES)" --fallback build/scenes/cornell.obj --out $(or $(OUT),build/paper) \
 	  --version $(VERSION) --tus "$(PAPER_TUS)" --table2-tus $(PAPER_TABLE2_TUS) --table2-fmax $(PAPER_TABLE2_FMAX) --bench $(PAPER_BENCH) \
 	  --width $(PAPER_WIDTH) --height $(PAPER_HEIGHT) --tus-width $(PAPER_TUS_WIDTH) --tus-height $(PAPER_TUS_HEIGHT) \
 	  --depth $(DEPTH) --seed $(SEED) $(if $(MACHINE_GBPS),--machine-gbps $(MACHINE_GBPS)) --make "$(MAKE)"
@@ -338,7 +338,7 @@ DSE_HEAP ?= 3g
 DSE_JAVA = java -Xss64m -Xmx$(DSE_HEAP) -Drtaccel.version=$(VERSION) -cp "$$(cat $(ROOT)/$(CP_FILE))"
 dse: deps
 	@test -n "$(SPACE)" || { echo "error: give SPACE=<space file>, e.g. SPACE=dse/spaces/smoke.toml" >&2; exit 2; }
-	@$(PY) -m dse.explore --space $(SPACE) --workers $(WORKERS) $(if $(RAY_ADDRESS),--ray-address $(RAY_ADDRESS)) \
+	@$(PY) -m dse.explore.explore --space $(SPACE) --workers $(WORKERS) $(if $(RAY_ADDRESS),--ray-address $(RAY_ADDRESS)) \
 	  $(if $(OUT),--out $(OUT)) --java '$(DSE_JAVA)' --version $(VERSION)
 
 # The speed-for-accuracy ladder (docs/dse.md): every rung of make dse on a fixed grid (FIDELITY_TUS x FIDELITY_CACHES
@@ -355,7 +355,7 @@ FIDELITY_HEIGHT ?= 24
 FIDELITY_DEPTH  ?= 5
 FIDELITY_WORKERS ?= 1
 fidelity: deps
-	@RTACCEL_SHARED_SCENES=$(SHARED_SCENES) $(PY) -m dse.fidelity --scenes "$(FIDELITY_SCENES)" --tus "$(FIDELITY_TUS)" \
+	@RTACCEL_SHARED_SCENES=$(SHARED_SCENES) $(PY) -m dse.studies.fidelity --scenes "$(FIDELITY_SCENES)" --tus "$(FIDELITY_TUS)" \
 	  --caches "$(FIDELITY_CACHES)" --mppls "$(FIDELITY_MPPLS)" --node-cache $(FIDELITY_NODE_CACHE) \
 	  --width $(FIDELITY_WIDTH) --height $(FIDELITY_HEIGHT) --depth $(FIDELITY_DEPTH) --seed $(SEED) \
 	  --workers $(FIDELITY_WORKERS) --out build/fidelity --java '$(DSE_JAVA)' --version $(VERSION)

@@ -1,1 +1,1 @@
-"""Design-space exploration helpers (analysis plots)."""
+"""Design-space exploration and measurement: explore/ (the explorer), paper/, studies/, plots/; common.py is shared."""

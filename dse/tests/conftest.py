@@ -1,10 +1,10 @@
-"""One local Ray instance (2 cpus) shared by the dse.explore tests: starting Ray costs seconds, a test
-should not pay it each time. dse.pool uses a running instance as it is and leaves it running."""
+"""One local Ray instance (2 cpus) shared by the dse.explore.explore tests: starting Ray costs seconds, a test
+should not pay it each time. dse.explore.pool uses a running instance as it is and leaves it running."""
 import os
 
 import pytest
 
-from dse.knobs import ROOT
+from dse.explore.knobs import ROOT
 
 
 @pytest.fixture(scope="session")

@@ -1,4 +1,4 @@
-"""Stand-in for `java ... rtaccel.cli.<Main>` in the dse.paper_caches tests (no JVM needed).
+"""Stand-in for `java ... rtaccel.cli.<Main>` in the dse.paper.caches tests (no JVM needed).
 
 Speaks the entry points' contract: `--key value` arguments, CacheSim's last stdout line is its JSON (and
 --sweep-out writes the miss-rate CSV), SweepTus writes OUT/tus_sweep.csv. The numbers are simple functions

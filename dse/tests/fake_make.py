@@ -1,4 +1,4 @@
-"""Stand-in for `make <target> VAR=value ...` in the dse.paper tests (no JVM, no Verilator).
+"""Stand-in for `make <target> VAR=value ...` in the dse.paper.paper tests (no JVM, no Verilator).
 
 Writes, for the targets make paper runs (golden, paper-nocache, paper-caches, analyze, roofline, area, bench), files of
 the shape the real targets write, with numbers chosen so a test can find them in the report. Appends one line

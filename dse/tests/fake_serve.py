@@ -1,4 +1,4 @@
-"""Stand-in for `java ... rtaccel.cli.Serve` in the dse.explore tests (no JVM): the same JSON-lines protocol,
+"""Stand-in for `java ... rtaccel.cli.Serve` in the dse.explore.explore tests (no JVM): the same JSON-lines protocol,
 answers that are simple functions of the flags, so the tests can predict every figure and every front.
 
 cachesim: predicted rays/s = 1e5 * TUS * (1 + NODE_CACHE / 256) (1.5 x that without head-of-line blocking); DRAM

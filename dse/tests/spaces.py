@@ -3,7 +3,7 @@ import textwrap
 
 import pytest
 
-from dse import space
+from dse.explore import space
 from scenes.errors import UserError
 
 SCENE = """

@@ -1,9 +1,9 @@
-"""dse.bench_caches on synthetic simulate / cachesim JSON lines."""
+"""dse.studies.bench_caches on synthetic simulate / cachesim JSON lines."""
 import json
 
 import pytest
 
-from dse import bench_caches
+from dse.studies import bench_caches
 
 
 def sim(tus, misses, hits, cycles, wall):
@@ -81,10 +81,10 @@ def test_cli_check_failure_is_exit_3_and_ok_true_passes(tmp_path):
     s = sim(1, 50, 950, 3_000_000, 12.0)
     write(tmp_path, "sim-tu1.json", {**s, "ok": True, "failures": []})
     write(tmp_path, "model-tu1.json", model(1, 50, 950, 0.002, 0.05))
-    r = run_cli("dse.bench_caches", str(tmp_path / "b.csv"), "s", str(tmp_path))
+    r = run_cli("dse.studies.bench_caches", str(tmp_path / "b.csv"), "s", str(tmp_path))
     assert r.returncode == 0, r.stderr
     (tmp_path / "b.csv").unlink()
     write(tmp_path, "sim-tu1.json", {**s, "ok": False, "failures": ["lost=4"]})
-    r = run_cli("dse.bench_caches", str(tmp_path / "b.csv"), "s", str(tmp_path))
+    r = run_cli("dse.studies.bench_caches", str(tmp_path / "b.csv"), "s", str(tmp_path))
     assert r.returncode == 3 and r.stderr.count("\n") == 1 and "check failed (lost=4)" in r.stderr
     assert not (tmp_path / "b.csv").exists() and r.stdout == ""

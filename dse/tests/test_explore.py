@@ -1,4 +1,4 @@
-"""make dse (dse.explore) through local Ray with 2 workers and a fake JVM server (fake_serve.py): strategies,
+"""make dse (dse.explore.explore) through local Ray with 2 workers and a fake JVM server (fake_serve.py): strategies,
 resuming, failing points, the RTL confirmation step and the outputs."""
 import csv
 import json
@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from dse import explore, pareto, store
+from dse.explore import explore, pareto, store
 
 from . import spaces
 
@@ -184,11 +184,11 @@ def test_a_sweep_killed_by_a_signal_resumes(tmp_path, capsys):
     import subprocess
     import time
 
-    from dse.knobs import ROOT
+    from dse.explore.knobs import ROOT
 
     sp, out = spaces.tiny(tmp_path), tmp_path / "out"
     jv, log = java(tmp_path, SLEEP=0.3)
-    p = subprocess.Popen([sys.executable, "-m", "dse.explore", "--space", str(sp), "--out", str(out), "--workers", "0",
+    p = subprocess.Popen([sys.executable, "-m", "dse.explore.explore", "--space", str(sp), "--out", str(out), "--workers", "0",
                           "--java", jv, "--version", "t1"], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     t0 = time.time()
     while time.time() - t0 < 60 and count(out) < 3:

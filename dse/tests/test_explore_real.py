@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from dse import explore, store
-from dse.knobs import ROOT
+from dse.explore import explore, store
+from dse.explore.knobs import ROOT
 
 from . import spaces
 

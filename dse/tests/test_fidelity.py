@@ -1,4 +1,4 @@
-"""make fidelity (dse.fidelity) on the procedural Cornell room with the fake JVM server (fake_serve.py), inline
+"""make fidelity (dse.studies.fidelity) on the procedural Cornell room with the fake JVM server (fake_serve.py), inline
 (no Ray): the CSV's columns, every error taken against the RTL row of the same point and scene, the store reused
 by a rerun, and exit 3 (no plot of it, no error from it) when an RTL run fails its check."""
 import csv
@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from dse import fidelity
+from dse.studies import fidelity
 
 from .test_explore import java, requests
 

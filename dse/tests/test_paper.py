@@ -1,12 +1,12 @@
-"""make paper (dse.paper, dse.paper_report) on synthetic sub-step outputs: fake_make.py stands in for the
+"""make paper (dse.paper.paper, dse.paper.report) on synthetic sub-step outputs: fake_make.py stands in for the
 sub-makes, so nothing here builds RTL or starts a JVM."""
 import os
 import sys
 
 import pytest
 
-from dse import paper, paper_facts as P
-from dse.paper_report import g
+from dse.paper import facts as P, paper
+from dse.paper.report import g
 from dse.tests import fake_make
 from scenes.errors import UserError
 

@@ -1,4 +1,4 @@
-"""dse.paper_caches (driven by a fake JVM, dse/tests/fake_java.py) and dse.plot_caches on synthetic CSVs."""
+"""dse.paper.caches (driven by a fake JVM, dse/tests/fake_java.py) and dse.plots.caches on synthetic CSVs."""
 import csv
 import json
 import os
@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from dse import plot_caches
+from dse.plots import caches as plot_caches
 from scenes.tests.helpers import run_cli
 
 from .fake_java import SWEEP
@@ -41,7 +41,7 @@ def inputs(tmp_path, monkeypatch):
 
 
 def drive(t, *extra, out="out"):
-    return run_cli("dse.paper_caches", "--scene", "/scenes/room.obj", "--tris", str(t / "tris.npy"),
+    return run_cli("dse.paper.caches", "--scene", "/scenes/room.obj", "--tris", str(t / "tris.npy"),
                    "--rays", str(t / "golden" / "rays.npy"), "--out", str(t / out), "--java", FAKE, *extra)
 
 
@@ -216,11 +216,11 @@ def test_plot_caches_combined(tmp_path):
     a, b = tmp_path / "a.csv", tmp_path / "b.csv"
     a.write_text(SCENE_A)
     b.write_text(SCENE_A.replace("/s/a.obj", "/s/b.obj"))
-    r = run_cli("dse.plot_caches", "fig11", str(tmp_path / "f11.png"), str(a), str(b))
+    r = run_cli("dse.plots.caches", "fig11", str(tmp_path / "f11.png"), str(a), str(b))
     assert r.returncode == 0, r.stderr
     assert_png(tmp_path / "f11.png")
     (tmp_path / "bytes.csv").write_text(BYTES)
-    r = run_cli("dse.plot_caches", "bytes", str(tmp_path / "b.png"), str(tmp_path / "bytes.csv"), str(tmp_path / "bytes.csv"))
+    r = run_cli("dse.plots.caches", "bytes", str(tmp_path / "b.png"), str(tmp_path / "bytes.csv"), str(tmp_path / "bytes.csv"))
     assert r.returncode == 0, r.stderr
     assert_png(tmp_path / "b.png")
     comments, mppls, d = plot_caches.read_bytes(str(tmp_path / "bytes.csv"))
@@ -243,7 +243,7 @@ def test_plot_caches_refuses_bad_csv(tmp_path, kind, text, words):
     good = tmp_path / "good.csv"
     good.write_text(SCENE_A if kind == "fig11" else BYTES)
     (tmp_path / "bad.csv").write_text(text)
-    r = run_cli("dse.plot_caches", kind, str(tmp_path / "out.png"), str(good), str(tmp_path / "bad.csv"))
+    r = run_cli("dse.plots.caches", kind, str(tmp_path / "out.png"), str(good), str(tmp_path / "bad.csv"))
     assert r.returncode == 2
     assert words in one_error_line(r)
     assert sorted(os.listdir(tmp_path)) == ["bad.csv", "good.csv"]  # the good CSV alone is not plotted either

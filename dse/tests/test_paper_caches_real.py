@@ -1,4 +1,4 @@
-"""dse.paper_caches through the real JVM (rtaccel.cli.CacheSim), not the fake one: the driver, the entry point's
+"""dse.paper.caches through the real JVM (rtaccel.cli.CacheSim), not the fake one: the driver, the entry point's
 flags and JSON, and the plots must agree with each other. Needs RTACCEL_CLASSPATH and the fixtures (make test)."""
 import csv
 import os
@@ -27,7 +27,7 @@ def test_paper_caches_with_the_real_cache_model(tmp_path):
         pytest.skip("procedural fixtures absent: run `make fixtures`")
     java = f"java -Xss64m -Xmx4g -cp {shlex.quote(Path(CP_FILE).read_text().strip())}"
     out = tmp_path / "out"
-    r = run_cli("dse.paper_caches", "--scene", str(d / "scene.obj"), "--tris", str(d / "tris.npy"),
+    r = run_cli("dse.paper.caches", "--scene", str(d / "scene.obj"), "--tris", str(d / "tris.npy"),
                 "--rays", str(d / "golden" / "rays.npy"), "--out", str(out), "--java", java, "--mppl-list", "1,4")
     assert r.returncode == 0, r.stderr
     fig11 = rows(out / "fig11_miss_rate.csv")

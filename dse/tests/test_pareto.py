@@ -1,9 +1,9 @@
-"""dse.pareto against the definition, point by point (directed cases and random ones)."""
+"""dse.explore.pareto against the definition, point by point (directed cases and random ones)."""
 import itertools
 
 from hypothesis import given, settings, strategies as hs
 
-from dse import pareto
+from dse.explore import pareto
 
 
 def brute_front(values, dirs):

@@ -20,7 +20,7 @@ level,nodes,accesses,accesses_per_node,cum_node_share,cum_access_share
 def test_plots_written(tmp_path):
     (tmp_path / "bandwidth_vs_mppl.csv").write_text(BW)
     (tmp_path / "levels.csv").write_text(LV)
-    r = run_cli("dse.plot_analysis", str(tmp_path))
+    r = run_cli("dse.plots.analysis", str(tmp_path))
     assert r.returncode == 0, r.stderr
     for name in ("bandwidth_vs_mppl.png", "levels.png"):
         data = (tmp_path / name).read_bytes()
@@ -31,7 +31,7 @@ def test_bad_csv_writes_nothing(tmp_path):
     (tmp_path / "bandwidth_vs_mppl.csv").write_text(BW.replace("prim_bytes_per_ray,", ""))
     (tmp_path / "levels.csv").write_text(LV)
     for d in (tmp_path, tmp_path / "missing"):
-        r = run_cli("dse.plot_analysis", str(d))
+        r = run_cli("dse.plots.analysis", str(d))
         assert r.returncode == 2
         lines = r.stderr.strip().splitlines()
         assert len(lines) == 1 and lines[0].startswith("error: ")

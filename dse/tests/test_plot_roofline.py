@@ -1,9 +1,9 @@
-"""dse.plot_roofline on a synthetic roofline.csv (the layout of rtaccel.cli.RooflineCmd)."""
+"""dse.plots.roofline on a synthetic roofline.csv (the layout of rtaccel.cli.RooflineCmd)."""
 import matplotlib.image
 import numpy as np
 import pytest
 
-from dse import plot_roofline
+from dse.plots import roofline as plot_roofline
 
 HEADER = ("tus,rays,cycles,rays_per_s,memory_bound,compute_bound,compute_bound_box,compute_bound_tri,roofline_fraction,"
           "binding,nearest_roof,dram_bytes_per_ray,box_jobs_per_ray,tri_jobs_per_ray,util_memory,util_iu,util_tu,"

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from dse import precision
+from dse.studies import precision
 from dse.common import parse_provenance
-from dse.knobs import ROOT
+from dse.explore.knobs import ROOT
 from scenes.errors import UserError
 
 CP_FILE = Path(os.environ.get("RTACCEL_CLASSPATH") or os.path.join(ROOT, "build", "classpath.txt"))

@@ -1,4 +1,4 @@
-"""dse.run_summary on a synthetic `make run` directory."""
+"""dse.studies.run_summary on a synthetic `make run` directory."""
 import json
 
 import pytest
@@ -30,7 +30,7 @@ def run_dir(tmp_path):
 def summary(d, sim=None):
     if sim is not None:
         (d / "simulate.log").write_text("[sim] progress\n" + json.dumps(sim) + "\n")
-    r = run_cli("dse.run_summary", str(d))
+    r = run_cli("dse.studies.run_summary", str(d))
     return r, r.stdout.splitlines()
 
 

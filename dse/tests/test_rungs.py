@@ -1,5 +1,5 @@
-"""The arguments each rung's run gets (dse/rungs.py)."""
-from dse import rungs
+"""The arguments each rung's run gets (dse/explore/rungs.py)."""
+from dse.explore import rungs
 
 
 def config_of(args):

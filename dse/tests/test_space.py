@@ -5,8 +5,8 @@ import os
 import pytest
 from hypothesis import given, settings, strategies as hs
 
-from dse import space
-from dse.knobs import KNOBS, ROOT
+from dse.explore import space
+from dse.explore.knobs import KNOBS, ROOT
 from scenes.errors import UserError
 from scenes.tests.helpers import run_cli
 
@@ -59,7 +59,7 @@ def test_a_bad_space_names_the_line(tmp_path, old, new, words):
 def test_make_dse_refuses_a_bad_space_with_one_error_and_writes_nothing(tmp_path):
     p = write(tmp_path, GOOD.replace("TUS = [1, 2]", "TUS = [0, 2]"))
     out = tmp_path / "out"
-    r = run_cli("dse.explore", "--space", str(p), "--out", str(out), "--java", "false")
+    r = run_cli("dse.explore.explore", "--space", str(p), "--out", str(out), "--java", "false")
     assert r.returncode == 2, r.stderr
     assert r.stderr.strip().count("\n") == 0 and r.stderr.startswith(f"error: {p}:{line_no(GOOD, 'TUS =')}: TUS = 0"), r.stderr
     assert r.stdout == "" and not out.exists()

@@ -2,7 +2,7 @@
 the verdict a synthesis re-decides, and a bad [fidelity] yosys_margin refused at its line."""
 import pytest
 
-from dse import report, rungs, space
+from dse.explore import report, rungs, space
 from scenes.tests.helpers import run_cli
 
 from .spaces import SCENE, line_no, refused, write
@@ -98,6 +98,6 @@ def test_yosys_margin_without_the_cost_rung_is_refused(tmp_path):
 def test_make_dse_refuses_a_bad_yosys_margin_with_one_error_and_writes_nothing(tmp_path):
     text = GOOD.replace("yosys_margin = 0.1", "yosys_margin = 2")
     p, out = write(tmp_path, text), tmp_path / "out"
-    r = run_cli("dse.explore", "--space", str(p), "--out", str(out), "--java", "false")
+    r = run_cli("dse.explore.explore", "--space", str(p), "--out", str(out), "--java", "false")
     assert r.returncode == 2 and r.stdout == "" and not out.exists(), r.stderr
     assert r.stderr.strip().count("\n") == 0 and r.stderr.startswith(f"error: {p}:{text.splitlines().index('yosys_margin = 2') + 1}: yosys_margin = 2"), r.stderr

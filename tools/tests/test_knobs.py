@@ -63,7 +63,7 @@ def test_the_entry_point_gives_the_same_refusal_with_status_2():
 
 
 def test_dse_knobs_are_the_export_and_judge_by_its_domains():
-    from dse import knobs
+    from dse.explore import knobs
     assert list(knobs.KNOBS) == [k["make"] for k in EXPORT]
     for k in EXPORT:
         dk = knobs.KNOBS[k["make"]]

@@ -5,7 +5,7 @@ import rtaccel.perf.Roofline
 
 /** make roofline: RTL runs (Simulate, each checked against the model) of one configuration or of a TUS list,
   * each set against its memory and compute bounds (rtaccel.perf.Roofline, docs/roofline.md). Writes
-  * OUT/roofline.csv (plotted by dse.plot_roofline) and prints, last, one JSON line: the roofline of the last
+  * OUT/roofline.csv (plotted by dse.plots.roofline) and prints, last, one JSON line: the roofline of the last
   * configuration (rays_per_s, memory_bound, compute_bound, roofline_fraction, binding, ...), the clock it assumes with
   * clock_source (given, board, proxy or routed: area.ClockSource) and "points", all of them.
   */

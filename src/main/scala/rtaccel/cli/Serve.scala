@@ -3,7 +3,7 @@ package rtaccel.cli
 import java.io.{BufferedReader, ByteArrayOutputStream, InputStreamReader, OutputStream, PrintStream}
 import scala.util.control.NonFatal
 
-/** rtaccel.cli.Serve: one JVM that answers many commands, for the design-space explorer (dse/explore.py).
+/** rtaccel.cli.Serve: one JVM that answers many commands, for the design-space explorer (dse/explore/explore.py).
   * Reads one JSON request per stdin line, {"cmd": "cachesim"|"analyze"|"simulate"|"area"|"trace", "args":
   * ["--flag", "value", ...]}, runs that command's main logic in this JVM with the same flags and checks as its
   * entry point, and answers one JSON line on stdout:

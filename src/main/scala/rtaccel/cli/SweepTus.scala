@@ -3,7 +3,7 @@ package rtaccel.cli
 import rtaccel.io.InputError
 
 /** Paper Figs 12-13: rays/s and memory utilisation vs the number of TUs, one RTL simulation per TU count,
-  * every run checked against the reference model. Writes OUT/tus_sweep.csv (plotted by dse.plot_tus).
+  * every run checked against the reference model. Writes OUT/tus_sweep.csv (plotted by dse.plots.tus).
   */
 object SweepTus {
   def desc(c: rtaccel.config.CacheParams): String =

@@ -36,6 +36,8 @@ object PlatformRun {
     "status_done" -> !j("status")("done").bool,
     "status_read_error" -> (j("status")("read_error").bool != (j("read_errors").num > 0)),
     "status_overflow" -> (j("status")("overflow").bool != (j("overflowed").num > 0)), "read_errors_vs_model" -> (j("read_error_disagreements").num > 0),
+    // TLAST on exactly one hit beat, the batch's last (none for an empty batch)
+    "hit_tlast" -> (j("hit_tlast")("beats").num != math.min(1, j("rays").num) || j("hit_tlast")("at").num != math.max(0, j("rays").num - 1)),
     // null when there is no cache to compare
     "cache_counts_match_model" -> (j("cache_counts_match_model") == ujson.False)).collect { case (n, true) => n }
 
@@ -176,6 +178,7 @@ object PlatformRun {
       val simWall = (tEnd - tSim) / 1e9
       val simCpu = (threads.getCurrentThreadCpuTime - cpuSim) / 1e9
       val received = dut.io.received.peek().litValue.toLong
+      val (tlasts, tlastAt) = (dut.io.tlasts.peek().litValue.toLong, dut.io.tlastAt.peek().litValue.toLong)
       val finish = HostSession.finish(host)
       val counters = finish.counters
       val cycles = counters("batch_cycles")
@@ -203,6 +206,11 @@ object PlatformRun {
       System.err.println(f"[simulate] readout: hits ${(tHits - tEnd) / 1e9}%.1f s, access log ${(tLog - tHits) / 1e9}%.1f s " +
         f"(${logged.map(_.length).sum} entries), cache check ${(System.nanoTime() - tLog) / 1e9}%.1f s")
       val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
+      // what the host got: a ray is usable when its record came back without a fault flag ("ok" says only that the
+      // hardware did what the model says; a run whose every ray read an error is ok, and not healthy)
+      val usable = (0 until rays.count).count(i => rtl.seen(i) > 0 && !rtlOverflow(i) && !rtlReadError(i))
+      System.err.println(s"[simulate] usable: $usable of ${rays.count} rays (${rtlReadError.count(identity)} read errors, " +
+        s"${rtlOverflow.count(identity)} stack overflows, ${rays.count - rtl.seen.count(_ > 0)} not returned)")
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
       val json = ujson.Obj(
@@ -225,6 +233,9 @@ object PlatformRun {
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> rtlReadError.count(identity),
         "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,
         "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
+        "health" -> ujson.Obj("usable" -> usable, "read_error" -> rtlReadError.count(identity), "overflow" -> rtlOverflow.count(identity),
+          "error_beats" -> counters("mem_read_errors").toDouble),
+        "hit_tlast" -> ujson.Obj("beats" -> tlasts.toDouble, "at" -> tlastAt.toDouble),
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
         "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,
         "timed_out" -> (received < rays.count || !finish.irqDone), "normalize_exponent" -> o.scaleExp,

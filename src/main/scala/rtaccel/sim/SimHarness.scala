@@ -62,6 +62,8 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val rayCount = Input(UInt(32.W)) // rays the host streams (RAY_COUNT of the batch)
     val received = Output(UInt(32.W))
     val sent = Output(UInt(32.W))
+    val tlasts = Output(UInt(32.W))   // hit beats that carried TLAST
+    val tlastAt = Output(UInt(32.W))  // the index of the last of them (0 before any)
     val readIdx = Input(UInt(32.W))
     val readData = Output(UInt(RtAccelTop.HitBits.W))
     // per IU cluster: entries readIdx * logWords .. + logWords - 1 of its log, the first lowest
@@ -94,10 +96,14 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   val lfsr = LFSR(16, seed = Some(s.seed & 0xffff | 1))
   val stall = if (s.hostStallPercent == 0) false.B else (lfsr(6, 0) < (s.hostStallPercent * 128 / 100).U)
   top.io.hits.ready := !stall
+  val tlasts = RegInit(0.U(32.W)); val tlastAt = RegInit(0.U(32.W))
   when(top.io.hits.fire) {
     when(received < io.rayCount) { hits(received) := top.io.hits.bits.tdata }
     received := received + 1.U
+    when(top.io.hits.bits.tlast) { tlasts := tlasts + 1.U; tlastAt := received }
   }
+  io.tlasts := tlasts
+  io.tlastAt := tlastAt
   io.received := received
   io.sent := sent
   io.readData := hits(io.readIdx)

@@ -42,6 +42,7 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
     val counters = Input(Vec(counterNames.length, UInt(64.W)))
     val acceptRays = Output(Bool())  // the ray stream may deliver (a batch is running and not yet full)
     val running = Output(Bool())     // a batch is running (START .. DONE)
+    val lastHitIndex = Output(UInt(32.W)) // RAY_COUNT - 1: the hit that ends the batch carries TLAST
     val clearCounters = Output(Bool())
     val primBase = Output(UInt(primBaseBits.W))
     val maxLevel = Output(UInt(levelBits.W))
@@ -107,6 +108,10 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
   }
   io.acceptRays := running && raysIn < rayCount
   io.running := running
+  // a register of its own, written with RAY_COUNT: the hit stream's TLAST compares with it, not through a subtractor
+  val lastHitIndex = RegInit(0.U(32.W))
+  when(wrote(RayCount)) { lastHitIndex := wData - 1.U }
+  io.lastHitIndex := lastHitIndex
   io.irq := (irqStatus & irqEnable).orR
   io.primBase := primBase(primBaseBits - 1, 0)
   io.maxLevel := maxLevel

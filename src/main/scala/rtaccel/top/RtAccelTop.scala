@@ -108,7 +108,11 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   io.hits.valid := tc.io.out.valid
   val h = tc.io.out.bits
   io.hits.bits.tdata := Cat(0.U(30.W), h.readError, h.overflow, h.v, h.u, h.prim, h.t, h.id)
-  io.hits.bits.tlast := false.B
+  // TLAST on the hit that ends the batch (the RAY_COUNT-th of a started batch), so a DMA engine can end its
+  // transfer there: hits are counted as they leave; the count clears between batches (RUNNING low)
+  val hitsSent = RegInit(0.U(32.W))
+  when(!regs.io.running) { hitsSent := 0.U }.elsewhen(io.hits.fire) { hitsSent := hitsSent + 1.U }
+  io.hits.bits.tlast := regs.io.running && hitsSent === regs.io.lastHitIndex
   tc.io.out.ready := io.hits.ready
 
   for ((tu, i) <- tus.zipWithIndex) {

@@ -64,6 +64,9 @@ class PlatformSpec extends AnyFunSuite {
     assert(j("overflowed").num == j("model_overflowed").num && j("overflow_disagreements").num == 0)
     assert(j("read_errors").num == j("model_read_errors").num && j("read_error_disagreements").num == 0)
     assert(j("ok").bool && j("failures").arr.isEmpty, ujson.write(j))
+    // the hit stream's TLAST on the batch's last hit only; "usable" counts the records without a fault flag
+    assert(j("hit_tlast")("beats").num == 1 && j("hit_tlast")("at").num == rays.count - 1, ujson.write(j("hit_tlast")))
+    assert(j("health")("usable").num == (0 until rays.count).count(i => o.hits.prim(i) >= -1), ujson.write(j("health")))
     assert(j("node_requests").num == j("model_node_fetches").num, "the RTL fetched a different number of nodes")
     assert(j("prim_requests").num == j("model_prim_tests").num, "the RTL fetched a different number of primitives")
     if (node.entries > 0 || prim.entries > 0) {

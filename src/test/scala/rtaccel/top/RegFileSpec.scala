@@ -233,7 +233,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
     }
   }
 
-  test("RW registers read back what was written; MAX_LEVEL and PRIM_BASE reach their outputs") {
+  test("RW registers read back what was written; MAX_LEVEL, PRIM_BASE and RAY_COUNT - 1 (TLAST's index) reach their outputs") {
     val seed = 5L
     withHost(seed) { (dut, h) =>
       val width = Map("IRQ_ENABLE" -> 2, "MAX_LEVEL" -> levelBits, "RAY_COUNT" -> 32, "PRIM_BASE_LO" -> 32, "PRIM_BASE_HI" -> 32)
@@ -251,6 +251,8 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
         dut.io.maxLevel.expect(shadow("MAX_LEVEL").U, s"op $i (seed $seed)")
         val base = (BigInt(shadow("PRIM_BASE_HI")) << 32) | BigInt(shadow("PRIM_BASE_LO"))
         assert(dut.io.primBase.peek().litValue == (base & ((BigInt(1) << primBaseBits) - 1)), s"op $i: primBase (seed $seed)")
+        // the hit that ends a batch of RAY_COUNT rays has index RAY_COUNT - 1 (mod 2^32: a batch of 0 has none)
+        assert(dut.io.lastHitIndex.peek().litValue == ((shadow("RAY_COUNT") - 1) & 0xffffffffL), s"op $i: lastHitIndex (seed $seed)")
         dut.io.irq.expect(false.B) // nothing pending
       }
       for (r <- rw) assert(h.readOk(r) == shadow(r.name), s"${r.name} (seed $seed)")

@@ -1,4 +1,4 @@
-"""python -m dse.plot_roofline OUT.png CSV — make roofline: achieved rays/s against the memory and compute bounds.
+"""python -m dse.plots.roofline OUT.png CSV — make roofline: achieved rays/s against the memory and compute bounds.
 
 CSV is the `roofline.csv` of rtaccel.cli.RooflineCmd (one row per TU count and IU count; a series per IUS). Left: rays/s of the RTL and the
 bounds (memory; compute with boxes and triangles alone) over the TUs; right: utilisation of memory, IU and TUs
@@ -74,5 +74,5 @@ def main(out, csv):
 
 if __name__ == "__main__":
     if len(sys.argv) != 3:
-        raise SystemExit("error: usage: python -m dse.plot_roofline OUT.png CSV")
+        raise SystemExit("error: usage: python -m dse.plots.roofline OUT.png CSV")
     main(*sys.argv[1:])

@@ -27,8 +27,8 @@ from golden.io import load_hits, load_rays, load_tris
 from scenes.cli import ArgParser, run
 from scenes.errors import UserError
 
-from .common import provenance_line, save_png, write_text
-from .worker import JvmServer
+from ..common import provenance_line, save_png, write_text
+from ..explore.worker import JvmServer
 
 DEFAULT_OPTIONS = ["fp32:mt", "fp24:mt", "fp16:mt", "bf16:mt", "fp32:watertight", "fp24:watertight",
                    "fp16:watertight", "bf16:watertight", "fp32:mt:q8", "fp32:mt:q12", "fp32:mt:full:packed",

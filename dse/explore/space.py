@@ -3,7 +3,7 @@
     [space]        name (default: the file name), description, base = {KNOB = value, ...} held fixed
     [[scenes]]     procedural = "<cornell|hairball|soup|extreme>" or mesh = "<path>", and either
                    rays = "<rays.npy>" or a golden frame width/height/depth/seed (defaults 32, 24, 1, 1)
-    [axes]         KNOB = [values, ...]          (dse.knobs.KNOBS: the Makefile's variables)
+    [axes]         KNOB = [values, ...]          (dse.explore.knobs.KNOBS: the Makefile's variables)
     [constraints]  fits = "<board>" | "BOARD" (each point's own BOARD), max_bram36, max_lut, max_dsp, max_ff
     [objectives]   maximize = [...], minimize = [...]   (OBJECTIVES below)
     [strategy]     kind = "grid" | "random" | "optuna"; n (random), budget + sampler "nsga2"|"tpe" (optuna), seed
@@ -40,7 +40,7 @@ KEYS = {
 @dataclass(frozen=True)
 class Scene:
     name: str
-    mesh: str            # absolute path; procedural ones are made in build/scenes/ by dse.explore
+    mesh: str            # absolute path; procedural ones are made in build/scenes/ by dse.explore.explore
     procedural: str = ""
     rays: str = ""       # a rays file, or "" for the golden frame below
     width: int = 32

@@ -1,4 +1,4 @@
-"""python -m dse.paper_caches --scene MESH --tris TRIS.npy --rays RAYS.npy --out DIR [--java CMD] [--m 4]
+"""python -m dse.paper.caches --scene MESH --tris TRIS.npy --rays RAYS.npy --out DIR [--java CMD] [--m 4]
        [--mppl 4] [--mppl-list 1,2,4,8,16] [--tus-list 1,2,4,8,16,32] [--nocache-csv CSV]
 
 The cache figures of Collinson & Sinnen 2017 for one scene (`make paper-caches` runs it per scene):
@@ -28,8 +28,8 @@ import time
 from scenes.cli import EXIT_CHECK_FAILED, ArgParser, run
 from scenes.errors import UserError
 
-from . import plot_caches, plot_tus
-from .common import NoJsonResult, failures_text, last_json as parse_last_json, provenance_line, write_text
+from ..common import NoJsonResult, failures_text, last_json as parse_last_json, provenance_line, write_text
+from ..plots import caches as plot_caches, tus as plot_tus
 
 # The paper's cache sizes (Sections 6.3 and 8): the largest node cache of its FPGA, and the split into half
 # that node cache plus a primitive cache of the same storage (entries counted in primitives, lines = 4096/MPPL).
@@ -216,7 +216,7 @@ class Scene:
 
 
 def main(argv=None):
-    ap = ArgParser(prog="python -m dse.paper_caches", description="Paper Figs 8, 9, 11 (cache model) and 12-13 (RTL).")
+    ap = ArgParser(prog="python -m dse.paper.caches", description="Paper Figs 8, 9, 11 (cache model) and 12-13 (RTL).")
     ap.add_argument("--scene", required=True, help="mesh path, used as the label in every output")
     ap.add_argument("--tris", required=True, help="tris.npy of the mesh (tools/tris)")
     ap.add_argument("--rays", required=True, help="rays.npy (make golden)")

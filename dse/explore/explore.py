@@ -1,9 +1,10 @@
-"""python -m dse.explore --space FILE [--out DIR] [--workers N] [--ray-address ADDR] [--java CMD] [--version V]
+"""python -m dse.explore.explore --space FILE [--out DIR] [--workers N] [--ray-address ADDR] [--java CMD] [--version V]
 
-`make dse SPACE=<file>`: the design points of a space file (dse/space.py) evaluated rung by rung (dse/rungs.py)
-on Ray workers that each keep one JVM (dse/worker.py), every run stored as it ends (dse/store.py), and only the
-predicted Pareto front plus a margin confirmed with the RTL. Writes into DIR (default build/dse/<space>):
-store.sqlite, points.csv, runs.csv, front.md, report.md, pareto_*.png (dse/report.py); the last stdout line is
+`make dse SPACE=<file>`: the design points of a space file (space.py) evaluated rung by rung (rungs.py) on Ray
+workers that each keep one JVM (worker.py, pool.py), every run stored as it ends (store.py), and only the
+predicted Pareto front plus a margin confirmed with the RTL; each module named here is in dse/explore/. Writes into
+DIR (default build/dse/<space>): store.sqlite, points.csv, runs.csv, front.md, report.md, pareto_*.png (report.py);
+the last stdout line is
 {"space","points","evaluated","skipped","failed","confirmed_rtl","pareto","store","wall_s",...}. With [fidelity]
 yosys_margin, the points it would confirm (and each board's best) whose model cost is near a limit are first
 synthesized with Yosys and their verdict re-decided (yosys_pass).

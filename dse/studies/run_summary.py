@@ -1,4 +1,4 @@
-"""python -m dse.run_summary RUN_DIR — the readable end of `make run`.
+"""python -m dse.studies.run_summary RUN_DIR — the readable end of `make run`.
 
 Reads the last JSON line of RUN_DIR/check.log (model vs Embree) and RUN_DIR/analyze.log (memory-access
 analysis), and of RUN_DIR/simulate.log (RTL) when there is one, prints a short report, and as its last line one
@@ -9,7 +9,7 @@ import json
 import sys
 from pathlib import Path
 
-from .common import NoJsonResult, exit_check_failed, failures_text, last_json_file
+from ..common import NoJsonResult, exit_check_failed, failures_text, last_json_file
 
 
 def last_json(path: Path) -> dict:

@@ -1,4 +1,4 @@
-"""python -m dse.plot_analysis DIR
+"""python -m dse.plots.analysis DIR
 
 Reads DIR/bandwidth_vs_mppl.csv and DIR/levels.csv and writes
   DIR/bandwidth_vs_mppl.png  node, primitive and total bytes per ray vs MPPL, log2 x axis (paper Fig. 4)
@@ -12,7 +12,7 @@ import os
 
 import numpy as np
 
-from dse.axes import log2_x
+from dse.plots.axes import log2_x
 from dse.common import save_png
 from scenes.cli import ArgParser, run
 from scenes.errors import UserError
@@ -116,7 +116,7 @@ def plot_levels(d, out):
 
 
 def main(argv=None):
-    ap = ArgParser(prog="python -m dse.plot_analysis", description="Plot the bandwidth and level analysis CSVs.")
+    ap = ArgParser(prog="python -m dse.plots.analysis", description="Plot the bandwidth and level analysis CSVs.")
     ap.add_argument("dir", help="directory with bandwidth_vs_mppl.csv and levels.csv")
     a = ap.parse_args(argv)
     if not os.path.isdir(a.dir):

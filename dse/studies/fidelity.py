@@ -1,9 +1,9 @@
-"""python -m dse.fidelity --java CMD --version V [--scenes sponza,conference,hairball] [--tus 1,2,4,8,16,32]
+"""python -m dse.studies.fidelity --java CMD --version V [--scenes sponza,conference,hairball] [--tus 1,2,4,8,16,32]
 [--caches none,dm,lrp,hybrid] [--mppls 4,8] [--node-cache 8192] [--width 32 --height 24 --depth 5 --seed 1]
 [--out build/fidelity] [--workers 1]
 
 `make fidelity`: the speed-for-accuracy ladder measured. On a fixed grid of configurations (TUs x node cache kind
-x MPPL) and scenes, every rung of `make dse` is run on every point (dse/rungs.py, the same workers, JVM server
+x MPPL) and scenes, every rung of `make dse` is run on every point (dse/explore/rungs.py, the same workers, JVM server
 and SQLite store, so a rerun evaluates only what is missing) and each cheap figure is compared with the RTL's:
 
   mva         the analytic rays/s (`predicted_rays_per_s`, MVA with head-of-line blocking)
@@ -31,12 +31,12 @@ from scenes.cli import EXIT_CHECK_FAILED, ArgParser, run
 from scenes.errors import UserError
 from scenes.procedural import NAMES as PROCEDURAL
 
-from . import store as st
-from .common import provenance_line, save_png, write_text
-from .explore import Sweep, log, prepare_scene
-from .knobs import ROOT
-from .pool import Pool
-from .space import Scene, Space
+from ..common import provenance_line, save_png, write_text
+from ..explore import store as st
+from ..explore.explore import Sweep, log, prepare_scene
+from ..explore.knobs import ROOT
+from ..explore.pool import Pool
+from ..explore.space import Scene, Space
 
 SHARED = os.environ.get("RTACCEL_SHARED_SCENES") or os.path.join(os.path.dirname(ROOT), "shared", "scenes")
 MESHES = {"sponza": "sponza_dabrovic.obj", "conference": "conference.obj"}  # short names of the shared meshes

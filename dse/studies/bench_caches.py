@@ -1,4 +1,4 @@
-"""python -m dse.bench_caches OUT.csv NAME DIR — the cache model against the RTL, one `make bench-caches` run.
+"""python -m dse.studies.bench_caches OUT.csv NAME DIR — the cache model against the RTL, one `make bench-caches` run.
 
 DIR holds, per TU count N, `sim-tuN.json` (make simulate, last line) and `model-tuN.json` (make cachesim with
 the same rays, caches and TUS=N, last line). For each N: node-cache miss rate of the RTL vs the fast model's
@@ -14,7 +14,7 @@ import sys
 
 from scenes.cli import run
 
-from .common import NoJsonResult, exit_check_failed, failures_text, last_json_file, provenance_line, write_text
+from ..common import NoJsonResult, exit_check_failed, failures_text, last_json_file, provenance_line, write_text
 
 
 def last_json(path):
@@ -80,5 +80,5 @@ def main(out_csv, name, d):
 
 if __name__ == "__main__":
     if len(sys.argv) != 4:
-        raise SystemExit("error: usage: python -m dse.bench_caches OUT.csv NAME DIR")
+        raise SystemExit("error: usage: python -m dse.studies.bench_caches OUT.csv NAME DIR")
     run(lambda _: main(*sys.argv[1:4]))  # an unwritable OUT.csv: one error line, like every other bad input

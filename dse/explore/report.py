@@ -9,7 +9,7 @@ import statistics
 import sys
 
 from . import pareto, rungs, store as st
-from .common import save_png, write_text
+from ..common import save_png, write_text
 from .knobs import KNOBS, verilog_command
 from .space import LIMITS
 

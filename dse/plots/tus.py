@@ -1,4 +1,4 @@
-"""python -m dse.plot_tus OUT CSV [CSV ...] — paper Figs 12-13: rays/s and memory utilisation vs TUs.
+"""python -m dse.plots.tus OUT CSV [CSV ...] — paper Figs 12-13: rays/s and memory utilisation vs TUs.
 
 Each CSV is a `tus_sweep.csv` of one scene (rtaccel.cli.SweepTus); its `#` provenance line labels the curve
 with the scene and its node cache (`node_cache=`), so cached (make paper-caches) and uncached (make
@@ -47,5 +47,5 @@ def main(out, *csvs):
 
 if __name__ == "__main__":
     if len(sys.argv) < 3:
-        raise SystemExit("error: usage: python -m dse.plot_tus OUT.png CSV [CSV ...]")
+        raise SystemExit("error: usage: python -m dse.plots.tus OUT.png CSV [CSV ...]")
     main(*sys.argv[1:])

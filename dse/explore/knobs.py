@@ -11,9 +11,9 @@ import os
 import re
 from dataclasses import dataclass
 
-from scenes.procedural import NAMES as PROCEDURAL_SCENES  # noqa: F401  (re-exported for dse.space)
+from scenes.procedural import NAMES as PROCEDURAL_SCENES  # noqa: F401  (re-exported for dse.explore.space)
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # dse/explore/ -> the project
 EXPORT = os.path.join(ROOT, "config", "knobs.json")
 
 

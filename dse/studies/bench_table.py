@@ -1,8 +1,8 @@
-"""python -m dse.bench_table NAME MODEL_JSON EMBREE_JSON — side-by-side figures of one `make bench` run."""
+"""python -m dse.studies.bench_table NAME MODEL_JSON EMBREE_JSON — side-by-side figures of one `make bench` run."""
 import json
 import sys
 
-from .common import NoJsonResult, last_json_file
+from ..common import NoJsonResult, last_json_file
 
 
 def result(path):

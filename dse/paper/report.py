@@ -12,10 +12,10 @@ from typing import Optional
 
 import numpy as np
 
-from . import paper_facts as P
-from .common import last_json_file, NoJsonResult
-from .plot_analysis import BANDWIDTH_COLUMNS, LEVEL_COLUMNS, read_csv
-from .plot_caches import read_bytes, read_fig11, split_csv
+from ..common import last_json_file, NoJsonResult
+from ..plots.analysis import BANDWIDTH_COLUMNS, LEVEL_COLUMNS, read_csv
+from ..plots.caches import read_bytes, read_fig11, split_csv
+from . import facts as P
 from scenes.errors import UserError
 
 

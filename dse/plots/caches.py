@@ -1,7 +1,7 @@
-"""python -m dse.plot_caches fig11|bytes OUT.png CSV [CSV ...] — the cache figures of the paper.
+"""python -m dse.plots.caches fig11|bytes OUT.png CSV [CSV ...] — the cache figures of the paper.
 
   fig11  node-cache miss rate vs cache size (paper Fig 11), one panel per CSV (= per scene): direct-mapped,
-         breadth-first and LRP0..6 as written by `dse.paper_caches` (fig11_miss_rate.csv)
+         breadth-first and LRP0..6 as written by `dse.paper.caches` (fig11_miss_rate.csv)
   bytes  DRAM bytes per ray vs MPPL (paper Figs 4, 8, 9), one row per CSV: (a) no cache, (b) node cache only,
          (c) node + primitive caches, node and primitive bytes stacked (fig8_9_bytes_per_ray.csv)
 
@@ -14,7 +14,7 @@ import os
 
 import numpy as np
 
-from dse.axes import log2_x
+from dse.plots.axes import log2_x
 from dse.common import parse_provenance, save_png
 from scenes.cli import ArgParser, run
 from scenes.errors import UserError
@@ -176,7 +176,7 @@ KINDS = {"fig11": (read_fig11, plot_fig11), "bytes": (read_bytes, plot_bytes)}
 
 
 def main(argv=None):
-    ap = ArgParser(prog="python -m dse.plot_caches", description="Plot the paper's cache figures from CSVs.")
+    ap = ArgParser(prog="python -m dse.plots.caches", description="Plot the paper's cache figures from CSVs.")
     ap.add_argument("kind", choices=sorted(KINDS), help="fig11 (miss rate vs size) or bytes (bytes per ray vs MPPL)")
     ap.add_argument("out", help="PNG to write")
     ap.add_argument("csvs", nargs="+", help="one CSV per scene")

@@ -1,7 +1,7 @@
 """Long-lived evaluators of `make dse`: each holds one JVM running rtaccel.cli.Serve (JSON lines) and keeps it
 between runs, so scenes, trees and access traces are parsed and built once per worker, not once per point.
 
-`Evaluator` is a plain class; dse.explore wraps it as a Ray actor (one per worker) or uses it inline.
+`Evaluator` is a plain class; dse.explore.explore wraps it as a Ray actor (one per worker) or uses it inline.
 """
 import json
 import os

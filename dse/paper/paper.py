@@ -1,4 +1,4 @@
-"""python -m dse.paper --scenes "MESH ..." --out DIR --version V [--tus 1,2,4,8,16,32] [--table2-tus 32]
+"""python -m dse.paper.paper --scenes "MESH ..." --out DIR --version V [--tus 1,2,4,8,16,32] [--table2-tus 32]
        [--width 128 --height 96] [--tus-width 32 --tus-height 24] [--depth 5] [--seed 1] [--machine-gbps X]
        [--fallback MESH] [--make CMD]
 
@@ -18,7 +18,7 @@ its PNGs. It runs the existing targets per scene and reads what they write:
                  both)                                                      DIR/<scene>/table2-fmax/
   bench          Embree and our model, one thread each (Table 2, Fig 15)     build/bench/<scene>/
 
-Each step's outputs are recorded in DIR/paper.sqlite (dse.store) under a key of (target, arguments, scene,
+Each step's outputs are recorded in DIR/paper.sqlite (dse.explore.store) under a key of (target, arguments, scene,
 rtaccel version); a rerun reuses a step whose outputs are still exactly the files it wrote (size and mtime) and
 newer than the mesh, and runs the rest. Empty --tus skips the TU sweeps; --table2-tus 0 skips Table 2's RTL run.
 
@@ -38,9 +38,9 @@ import numpy as np
 from scenes.cli import ArgParser, run
 from scenes.errors import UserError
 
-from . import store
-from .common import write_text
-from .paper_report import RunInfo, SceneOutputs, render
+from ..common import write_text
+from ..explore import store
+from .report import RunInfo, SceneOutputs, render
 
 
 class StepFailed(Exception):
@@ -225,7 +225,7 @@ def _timed(f, *args):
 
 
 def main(argv=None):
-    ap = ArgParser(prog="python -m dse.paper", description="make paper: the paper's figures and tables, ours beside theirs.")
+    ap = ArgParser(prog="python -m dse.paper.paper", description="make paper: the paper's figures and tables, ours beside theirs.")
     ap.add_argument("--scenes", required=True, help="meshes, space-separated; absent ones are skipped with a note")
     ap.add_argument("--fallback", default="", help="mesh to use when none of --scenes exists")
     ap.add_argument("--out", required=True)
