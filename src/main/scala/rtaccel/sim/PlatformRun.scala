@@ -209,8 +209,9 @@ object PlatformRun {
       // what the host got: a ray is usable when its record came back without a fault flag ("ok" says only that the
       // hardware did what the model says; a run whose every ray read an error is ok, and not healthy)
       val usable = (0 until rays.count).count(i => rtl.seen(i) > 0 && !rtlOverflow(i) && !rtlReadError(i))
-      System.err.println(s"[simulate] usable: $usable of ${rays.count} rays (${rtlReadError.count(identity)} read errors, " +
-        s"${rtlOverflow.count(identity)} stack overflows, ${rays.count - rtl.seen.count(_ > 0)} not returned)")
+      val (nOverflow, nReadError) = (rtlOverflow.count(identity), rtlReadError.count(identity))
+      System.err.println(s"[simulate] usable: $usable of ${rays.count} rays ($nReadError read errors, " +
+        s"$nOverflow stack overflows, ${rays.count - rtl.seen.count(_ > 0)} not returned)")
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
       val json = ujson.Obj(
@@ -228,12 +229,12 @@ object PlatformRun {
         // where the wall time went: model + inputs, simulator build (or cache load) + host setup, the run, readout and checks
         "wall_model_s" -> modelWall, "wall_build_s" -> (tSim - t0) / 1e9, "wall_readout_s" -> (System.nanoTime() - tEnd) / 1e9,
         "scene" -> label, "config" -> p.name, "tus" -> p.tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "resp_order" -> p.respOrder, "ray_store" -> p.rayStore, "tag_forward" -> p.tagForward, "node_banks" -> p.nodeBanks, "m" -> p.m, "mppl" -> p.mppl,
-        "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "model_restarts" -> stats.restarts.toDouble, "overflowed" -> rtlOverflow.count(identity), "model_overflowed" -> stats.overflows,
-        "stack_overflow_rays" -> rtlOverflow.count(identity), "model_stack_overflow_rays" -> stats.overflows,
-        "overflow_disagreements" -> overflowDisagree, "read_errors" -> rtlReadError.count(identity),
+        "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "model_restarts" -> stats.restarts.toDouble, "overflowed" -> nOverflow, "model_overflowed" -> stats.overflows,
+        "stack_overflow_rays" -> nOverflow, "model_stack_overflow_rays" -> stats.overflows,
+        "overflow_disagreements" -> overflowDisagree, "read_errors" -> nReadError,
         "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,
         "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
-        "health" -> ujson.Obj("usable" -> usable, "read_error" -> rtlReadError.count(identity), "overflow" -> rtlOverflow.count(identity),
+        "health" -> ujson.Obj("usable" -> usable, "read_error" -> nReadError, "overflow" -> nOverflow,
           "error_beats" -> counters("mem_read_errors").toDouble),
         "hit_tlast" -> ujson.Obj("beats" -> tlasts.toDouble, "at" -> tlastAt.toDouble),
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
