@@ -57,6 +57,7 @@ object Cli {
       tagForward = a.switch("tag-forward", "TAG_FORWARD", base.tagForward,
         "1 (cache tags take one lookup per cycle, forwarding the set just written) or 0 (one lookup per two cycles)"),
       nodeBanks = a.int("node-banks", base.nodeBanks),
+      memRetries = a.int("mem-retries", base.memRetries),
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),

@@ -78,6 +78,9 @@ object Knobs {
     val platform: Set[String] = tree -- Set("trace", "check", "analyze")
     /** The datapath's registers and the clock: the circuit's commands and the fp operators alone (area-fp). */
     val clocked: Set[String] = platform + "area-fp"
+    /** The RTL's own knobs, which no model reads (the memory controller's re-reads: below the caches, they change no
+      * count, no hit and no throughput model's figure): the commands that build or simulate the circuit. */
+    val circuit: Set[String] = Set("simulate", "roofline", "soak", "verilog", "lint", "area", "timing", "max-tus")
     /** make precision runs every arithmetic option itself (PRECISION_OPTIONS) */
     val arithmetic: Set[String] = tree - "precision"
   }
@@ -126,6 +129,8 @@ object Knobs {
       Names(Seq("0", "1")), shapes = true, Use.platform, cal("0")(p => bit(p.tagForward && (p.nodeCache.entries > 0 || p.primCache.entries > 0)))),
     Knob("NODE_BANKS", "node-banks", "k >= 1: one node cache of NODE_CACHE entries shared by every IU, in k banks by the node id's low bits (needs RESP_ORDER=tagged); 0: a node cache per IU",
       Ints(1, 64, pow2 = true, zero = true), shapes = true, Use.platform, cal("0")(_.nodeBanks.toString)),
+    Knob("MEM_RETRIES", "mem-retries", "re-reads of a burst the memory answered with SLVERR before its rays are flagged read error (0: flag at once)",
+      Ints(0, PlatformParams.MaxMemRetries), shapes = true, Use.circuit),
     Knob("SHORT_STACK", "short-stack", "ring of that many entries with restart instead of the full stack (0: the full stack)", Ints(0, 64), shapes = true, Use.tree),
     Knob("BOX_FORMAT", "box-format", "arithmetic of the ray-box test (narrower ones round outward; m<M> fits the exponent to the scene)",
       AnyOf(Names(Seq("fp32", "fp24", "bf16", "fp16")), Template(Seq(("e", 3, 8), ("m", 2, 23))), Template(Seq(("m", 2, 23)))), shapes = true, Use.arithmetic,

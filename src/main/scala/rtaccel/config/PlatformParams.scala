@@ -145,6 +145,10 @@ final case class PlatformParams(
   // the node id, each bank a tag pipeline and data RAM of entries / k lines behind a crossbar; 0: each IU cluster has
   // a node cache of its own of nodeCache.entries (docs/caches.md, "Shared node cache")
   nodeBanks: Int = 0,
+  // MEM_RETRIES=n: the MC re-reads a burst that the memory answered with SLVERR up to n times before its beats go on
+  // marked as errors (the ray is flagged read error); 0 flags at once. Below the caches, so a cache never sees an
+  // error a re-read cleared (docs/platform.md, "Memory errors")
+  memRetries: Int = 1,
   // PIPELINE: LUT levels allowed between two registers of the datapaths (fp operators, IU pipes, the TC's ray
   // preparation): auto = what the target clock leaves on `family` (docs/timing.md); none = the fixed stages
   pipelining: Pipelining = Pipelining.Auto,
@@ -172,6 +176,8 @@ final case class PlatformParams(
   require(ius >= 1 && ius <= 64, s"IUS must be in 1..64 (got $ius)")
   require(memChannels >= 1 && memChannels <= 16 && Integer.bitCount(memChannels) == 1,
     s"MEM_CHANNELS must be 1, 2, 4, 8 or 16 (got $memChannels): the channel is address bits above the interleave block")
+  require(memRetries >= 0 && memRetries <= PlatformParams.MaxMemRetries,
+    s"MEM_RETRIES must be 0..${PlatformParams.MaxMemRetries} (got $memRetries): a transient error clears on its first re-read")
   require(tus % ius == 0, s"TUS=$tus does not split evenly over IUS=$ius intersection units; make TUS a multiple of IUS")
   require(Set(2, 4, 8)(m), s"M (MBVH width) must be 2, 4 or 8 (got $m)")
   require(mppl >= 1, s"MPPL must be at least 1 (got $mppl)")
@@ -268,7 +274,8 @@ final case class PlatformParams(
   /** Whether the cluster MCs give each path a response buffer: caches reorder DRAM traffic between the paths, and
     * with several clusters or channels the buffers keep one's R beats from waiting on another's (MemoryController).
     */
-  def mcResponseBuffers: Boolean = nodeCache.entries > 0 || primCache.entries > 0 || ius > 1 || memChannels > 1 || respByPath
+  def mcResponseBuffers: Boolean = nodeCache.entries > 0 || primCache.entries > 0 || ius > 1 || memChannels > 1 || respByPath ||
+    memRetries > 0 // a re-read lands in the room its first read reserved, before later reads' beats (MemoryController)
   /** Cycles PIPELINE's slices add to a DRAM read of a path, where the MC has response buffers: one on the read, one
     * on its beats into and one out of the buffer (a pass-through path pays them on every access, a cache on a miss).
     */
@@ -300,4 +307,10 @@ final case class PlatformParams(
   val memPeakBytesPerSecondTotal: Double = memory.bytesPerSecond * memChannels
   /** Its sustained share (MemoryParams.sustainedEfficiency), what the DRAM model delivers over all channels. */
   val memBytesPerSecondTotal: Double = memPeakBytesPerSecondTotal * memory.sustainedEfficiency
+}
+
+object PlatformParams {
+  /** MEM_RETRIES' largest value: the register map's field (FORMATS2.MEM_RETRIES) has two bits. A transient error
+    * clears on the first re-read; more re-reads only delay the flag of an error that stays. */
+  val MaxMemRetries = 3
 }

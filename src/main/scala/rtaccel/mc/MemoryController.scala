@@ -50,7 +50,8 @@ class PathStats(bits: Int) extends Bundle {
 }
 
 /** What the MC counts (HwLimits.mcCounterBits each, never cleared by traffic): requests by kind, primitives and
-  * bytes requested, R beats received (DRAM busy), and each path's cache statistics.
+  * bytes requested, R beats received (DRAM busy) and those with an error, each path's cache statistics, and the
+  * re-reads of MEM_RETRIES.
   */
 class McCounters(val bits: Int) extends Bundle {
   val nodeRequests = UInt(bits.W)
@@ -61,6 +62,7 @@ class McCounters(val bits: Int) extends Bundle {
   val readErrors = UInt(bits.W)
   val nodeCache = new PathStats(bits)
   val primCache = new PathStats(bits)
+  val retries = UInt(bits.W) // MEM_RETRIES: reads issued again after an SLVERR
 }
 
 object McCounters {
@@ -219,6 +221,13 @@ class BurstSplitter(g: McGeometry, id: Int = 0) extends Module {
   * each path gets a response buffer of that many beats; a path's DRAM read is granted only if its buffer has
   * room for all its beats (credits), so R never waits on the order mux and cannot deadlock; backpressure then
   * stops AR issue instead of holding R.
+  * MEM_RETRIES = n > 0 (needs respBufferBeats > 0): a read whose beats include an SLVERR is read again, up to n times,
+  * before its beats go on marked as errors. Each read's beats land in the slots its grant reserved (ReadBuffer), so a
+  * re-read, issued after later reads, still reaches its path before them. Beats pass on as they land: the beats before
+  * a read's first failed one go at once, and its re-read delivers only from that beat on (dropping what was already
+  * delivered), so a read that needs no re-read waits for nothing. A DECERR (no memory at that address) is not re-read.
+  * Re-reads go to DRAM before any new read (the arbiter's first choice): the reads in flight, re-reads waiting
+  * included, never grow while one waits, so the re-read queue (mcOutstanding + 2 entries) cannot fill.
   * A node bank's MC (NODE_BANKS, rtaccel.cache.hw.NodeBanks): extraTagBits widen the tag by the requesting cluster,
   * and its node path sees line = node id >> nodeLineShift (the id without the bank bits, as a bank indexes its sets).
   */
@@ -245,6 +254,8 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   // the two streams drain independently, so an R beat for a stream that waits must have room to land
   require(!p.respByPath || respBufferBeats > 0,
     "RESP_ORDER=path drains the node and primitive streams independently; give the MC respBufferBeats > 0")
+  require(p.memRetries == 0 || respBufferBeats > 0,
+    s"MEM_RETRIES=${p.memRetries} re-reads into the room a read reserved; give the MC respBufferBeats > 0 (PlatformParams.mcResponseBuffers)")
   require(respBufferBeats == 0 || respBufferBeats >= g.maxBeats,
     s"a response buffer of $respBufferBeats beats cannot hold the largest fetch (${g.maxBeats} beats); raise respBufferBeats")
   private val NodePath = FetchPath.Node
@@ -297,22 +308,33 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
 
   // ---- DRAM side: arbiter -> burst splitter -> AR; R routed back by the memory-order FIFO
   val arb = Module(new RRArbiter(g.memReq, 2))
-  val memOrder = Module(new Queue(new Bundle {
+  private val buffered = respBufferBeats > 0
+  private val retrying = p.memRetries > 0
+  private val attemptBits = log2Ceil(p.memRetries + 1)
+  /** A read in flight: its path and beats; with response buffers the first slot it reserved; with MEM_RETRIES its
+    * address (to read it again), its attempt (0 first) and the beats already delivered (`good`, re-reads skip them).
+    */
+  class InFlight extends Bundle {
     val path = UInt(1.W)
     val beats = UInt(g.beatsBits.W)
-  }, maxOutstanding))
+    val base = if (buffered) Some(UInt(log2Ceil(respBufferBeats).max(1).W)) else None
+    val addr = if (retrying) Some(UInt(axi.addrBits.W)) else None
+    val attempt = if (retrying) Some(UInt(attemptBits.W)) else None
+    val good = if (retrying) Some(UInt(g.beatsBits.W)) else None
+  }
+  val memOrder = Module(new Queue(new InFlight, maxOutstanding))
   val splitter = Module(new BurstSplitter(g))
   // Each path's DRAM-response sink: straight to the path, or a credit-managed buffer in front of it.
   // with response buffers (DRAM may answer the paths out of request order) and PIPELINE, a path's reads pass a
   // register slice: the arbiter's ready and the credits end there, and a cache path's miss queue is not read into
   // the arbiter
-  val sinks = for ((path, i) <- paths.zipWithIndex) yield {
-    val req = if (respBufferBeats > 0) rtaccel.arb.Slice(p, path.io.memReq) else path.io.memReq
-    if (respBufferBeats == 0) {
+  val bufs = for ((path, i) <- paths.zipWithIndex) yield {
+    val req = if (buffered) rtaccel.arb.Slice(p, path.io.memReq) else path.io.memReq
+    if (!buffered) {
       arb.io.in(i) <> req
-      path.io.memResp
+      None
     } else {
-      val buf = Module(new Queue(new FetchBeat(axi.dataBits), respBufferBeats))
+      val buf = Module(new ReadBuffer(new FetchBeat(axi.dataBits), respBufferBeats, g.beatsBits))
       val free = RegInit(respBufferBeats.U(log2Ceil(respBufferBeats + 1).W))
       val fits = free >= req.bits.beats
       arb.io.in(i).valid := req.valid && fits
@@ -320,42 +342,90 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
       req.ready := arb.io.in(i).ready && fits
       val taken = Mux(arb.io.in(i).fire, req.bits.beats, 0.U)
       free := free - taken + buf.io.deq.fire.asUInt
+      buf.io.alloc := arb.io.in(i).fire
+      buf.io.allocBeats := req.bits.beats
       // a path's ready for DRAM beats comes from its ticket queue's head (a cache) or the response order (a pass-
-      // through path): with PIPELINE it ends at a register slice, not in the buffer's pointers, credits and block
-      // RAM address (one cycle more on every DRAM read)
+      // through path): with PIPELINE it ends at a register slice, not in the buffer's pointers, credits and RAM
+      // address (one cycle more on every DRAM read)
       path.io.memResp <> rtaccel.arb.Slice(p, buf.io.deq)
-      // and the R beat, routed by the memory-order FIFO's head, enters the buffer's block RAM from a register slice
-      // (the credits already hold room for what the slice holds)
-      val in = Wire(Decoupled(new FetchBeat(axi.dataBits)))
-      buf.io.enq <> rtaccel.arb.Slice(p, in)
-      in
+      Some(buf)
     }
   }
+  // MEM_RETRIES: reads to issue again, ahead of every new read
+  val retryQ = if (retrying) Some(Module(new Queue(new InFlight, maxOutstanding + 2))) else None
   // with PIPELINE the arbiter's choice passes a register slice (arb.Slice) before the splitter and the memory-order
   // FIFO: their readies end there. After the arbiter, so DRAM order stays the order it chose (one slice, not one
   // per path: two would let a later request overtake an earlier one, which the in-order response mux cannot wait out)
-  val chosen = Wire(Decoupled(new Bundle { val req = g.memReq; val path = UInt(1.W) }))
-  chosen.valid := arb.io.out.valid; chosen.bits.req := arb.io.out.bits; chosen.bits.path := arb.io.chosen
-  arb.io.out.ready := chosen.ready
+  val chosen = Wire(Decoupled(new Bundle { val req = g.memReq; val read = new InFlight }))
+  val fresh = Wire(new InFlight)
+  fresh.path := arb.io.chosen; fresh.beats := arb.io.out.bits.beats
+  for (b <- fresh.base) b := VecInit(bufs.map(_.get.io.base))(arb.io.chosen)
+  for (a <- fresh.addr) a := arb.io.out.bits.addr
+  for (a <- fresh.attempt) a := 0.U
+  for (gd <- fresh.good) gd := 0.U
+  val again = retryQ.fold(false.B)(_.io.deq.valid)
+  chosen.valid := arb.io.out.valid || again
+  chosen.bits.read := fresh
+  chosen.bits.req := arb.io.out.bits
+  arb.io.out.ready := chosen.ready && !again
+  for (q <- retryQ) {
+    q.io.deq.ready := chosen.ready
+    when(again) { chosen.bits.read := q.io.deq.bits; chosen.bits.req.addr := q.io.deq.bits.addr.get; chosen.bits.req.beats := q.io.deq.bits.beats }
+  }
   val issue = rtaccel.arb.Slice(p, chosen)
   splitter.io.in.valid := issue.valid && memOrder.io.enq.ready
   splitter.io.in.bits := issue.bits.req
   issue.ready := splitter.io.in.ready && memOrder.io.enq.ready
   memOrder.io.enq.valid := issue.valid && splitter.io.in.ready
-  memOrder.io.enq.bits.path := issue.bits.path
-  memOrder.io.enq.bits.beats := issue.bits.req.beats
+  memOrder.io.enq.bits := issue.bits.read
   io.axi.ar <> splitter.io.ar
 
   val rBeat = RegInit(0.U(g.beatsBits.W))
   val rHead = memOrder.io.deq.bits
   val rLast = rBeat === rHead.beats - 1.U
-  val rPathReady = VecInit(sinks.map(_.ready))(rHead.path)
+  val rErr = io.axi.r.bits.resp =/= 0.U // SLVERR or DECERR
+  // MEM_RETRIES: an SLVERR before the last attempt fails this attempt; its beats from the first failed one on are
+  // dropped and the read goes to the re-read queue (beats before `good` were delivered by an earlier attempt)
+  val retry = retryQ.map { q =>
+    val failed = RegInit(false.B); val failAt = Reg(UInt(g.beatsBits.W))
+    val fails = io.axi.r.bits.resp === 2.U && rHead.attempt.get =/= p.memRetries.U
+    val isNew = rBeat >= rHead.good.get && !failed
+    val failsNow = isNew && fails
+    when(io.axi.r.fire) {
+      when(failsNow) { failAt := rBeat }
+      failed := Mux(rLast, false.B, failed || failsNow)
+    }
+    q.io.enq.valid := io.axi.r.fire && rLast && (failed || failsNow)
+    q.io.enq.bits := rHead
+    q.io.enq.bits.attempt.get := rHead.attempt.get + 1.U
+    q.io.enq.bits.good.get := Mux(failed, failAt, rBeat)
+    (isNew && !fails, q.io.enq.ready)
+  }
+  val keep = retry.fold(true.B)(_._1)
+  val rPathReady = bufs.head match {
+    case None => VecInit(paths.map(_.io.memResp.ready))(rHead.path)
+    case Some(_) => retry.fold(true.B)(_._2) // a beat always has its slot (credits); a failed read needs the queue
+  }
   io.axi.r.ready := memOrder.io.deq.valid && rPathReady
-  for ((sink, i) <- sinks.zipWithIndex) {
-    sink.valid := io.axi.r.valid && memOrder.io.deq.valid && rHead.path === i.U
-    sink.bits.data := io.axi.r.bits.data
-    sink.bits.last := rLast
-    sink.bits.err := io.axi.r.bits.resp =/= 0.U // SLVERR or DECERR
+  for (((path, b), i) <- paths.zip(bufs).zipWithIndex) {
+    val hit = io.axi.r.valid && memOrder.io.deq.valid && rHead.path === i.U
+    val beat = Wire(new FetchBeat(axi.dataBits))
+    beat.data := io.axi.r.bits.data
+    beat.last := rLast
+    beat.err := rErr
+    b match {
+      case None =>
+        path.io.memResp.valid := hit
+        path.io.memResp.bits := beat
+      case Some(buf) =>
+        // the R beat, routed by the memory-order FIFO's head, reaches the buffer's RAM from a register with PIPELINE
+        // (the credits already hold room for it)
+        val w = Wire(Valid(chiselTypeOf(buf.io.write.bits)))
+        w.valid := hit && io.axi.r.ready && keep
+        w.bits.slot := buf.wrap(rHead.base.get, rBeat)
+        w.bits.beat := beat
+        buf.io.write := rtaccel.arb.Slice.late(p, w)
+    }
   }
   memOrder.io.deq.ready := io.axi.r.fire && rLast
   when(io.axi.r.fire) { rBeat := Mux(rLast, 0.U, rBeat + 1.U) }
@@ -386,9 +456,9 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   io.counters.primsRequested := counter(count, reqFire && isLeaf)
   io.counters.bytesRequested := counter(Mux(isLeaf, g.leaf.bytes(count), p.nodeSlotBytes.U), reqFire)
   io.counters.busyBeats := counter(1.U, io.axi.r.fire)
-  io.counters.readErrors := counter(1.U, io.axi.r.fire && io.axi.r.bits.resp =/= 0.U)
+  io.counters.readErrors := counter(1.U, io.axi.r.fire && rErr)
+  io.counters.retries := counter(1.U, retryQ.fold(false.B)(_.io.enq.fire))
 
   when(io.axi.r.valid) { assert(memOrder.io.deq.valid, "MemoryController: an R beat with no read outstanding") }
-  if (respBufferBeats > 0)
-    when(io.axi.r.valid && memOrder.io.deq.valid) { assert(rPathReady, "MemoryController: a response buffer overflowed its credits") }
+  for (q <- retryQ) when(io.axi.r.valid && memOrder.io.deq.valid) { assert(q.io.enq.ready, "MemoryController: the re-read queue filled") }
 }

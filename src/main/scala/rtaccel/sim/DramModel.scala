@@ -11,7 +11,8 @@ import rtaccel.mc.{AxiAr, AxiParams, AxiReadMaster}
   * bytesPerCycleNum / bytesPerCycleDen: sustained bandwidth, an exact rational number of bytes per cycle.
   * randomExtraLatency: each request waits a further pseudo-random 0..randomExtraLatency cycles (LFSR, seed).
   * errorThreshold (of 65536) / errorSeed: poisoned beats (rtaccel.model.MemFaults): a poisoned beat is
-  * answered with SLVERR and inverted data, so that a platform that ignored RRESP would compute wrong hits.
+  * answered with SLVERR and inverted data, so that a platform that ignored RRESP would compute wrong hits. Whether
+  * the error stays is the model's input `sticky` (MEM_ERROR_MODE), so one simulator build runs either mode.
   */
 final case class DramConfig(latencyCycles: Int, bytesPerCycleNum: Int, bytesPerCycleDen: Int,
                             randomExtraLatency: Int = 0, seed: Int = 1, errorThreshold: Int = 0, errorSeed: Int = 1) {
@@ -60,9 +61,14 @@ class DramModel(axi: AxiParams, words: Int, hexFile: String, cfg: DramConfig, qu
     val axi = Flipped(new AxiReadMaster(ap))
     /** Free-running cycle counter (for tests and traces). */
     val cycle = Output(UInt(64.W))
+    /** MEM_ERROR_MODE=sticky: a poisoned beat fails every read, like a bad cell; transient (false): it fails its
+      * first read only, like a soft error the read corrects, and every later read of it is clean. */
+    val sticky = Input(Bool())
   })
 
-  val mem = Mem(words, UInt(axi.dataBits.W))
+  // with errors, each word carries one bit more (0 as loaded from the file): its transient error was spent
+  private val spentBit = if (cfg.errorThreshold > 0) 1 else 0
+  val mem = Mem(words, UInt((axi.dataBits + spentBit).W))
   if (hexFile.nonEmpty) loadMemoryFromFileInline(mem, hexFile)
 
   val cycle = RegInit(0.U(64.W))
@@ -103,9 +109,11 @@ class DramModel(axi: AxiParams, words: Int, hexFile: String, cfg: DramConfig, qu
 
   r.valid := started && haveCredit
   r.bits.id := head.id
-  val word = mem(wordIdx(math.max(log2Ceil(words), 1) - 1, 0))
+  val memIdx = wordIdx(math.max(log2Ceil(words), 1) - 1, 0)
+  val stored = mem(memIdx)
+  val word = stored(axi.dataBits - 1, 0)
   // the same hash as rtaccel.model.MemFaults.hash16, so the model knows which beats are poisoned
-  val poisoned: Bool = if (cfg.errorThreshold == 0) false.B else {
+  val bad: Bool = if (cfg.errorThreshold == 0) false.B else {
     import rtaccel.model.MemFaults
     val x = wordIdx.pad(32)(31, 0) ^ (cfg.errorSeed.toLong & 0xffffffffL).U(32.W)
     val m1 = (x * MemFaults.Mul1.U(32.W))(31, 0)
@@ -113,6 +121,9 @@ class DramModel(axi: AxiParams, words: Int, hexFile: String, cfg: DramConfig, qu
     val m2 = (h1 * MemFaults.Mul2.U(32.W))(31, 0)
     (m2 ^ (m2 >> 13))(15, 0) < cfg.errorThreshold.U(17.W)
   }
+  val poisoned: Bool = if (spentBit == 0) false.B else bad && (io.sticky || !stored(axi.dataBits))
+  // a transient error is spent by the read that reports it
+  if (spentBit > 0) when(r.fire && inRange && poisoned && !io.sticky) { mem.write(memIdx, Cat(1.U(1.W), word)) }
   r.bits.data := Mux(inRange, Mux(poisoned, ~word, word), 0.U)
   r.bits.resp := Mux(!inRange, 3.U, Mux(poisoned, 2.U, 0.U)) // DECERR, SLVERR, OKAY
   r.bits.last := isLast

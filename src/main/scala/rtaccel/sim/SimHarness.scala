@@ -60,6 +60,7 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val lite = Flipped(new AxiLite(top.io.lite.addrBits))
     val irq = Output(Bool())
     val rayCount = Input(UInt(32.W)) // rays the host streams (RAY_COUNT of the batch)
+    val errorSticky = Input(Bool()) // MEM_ERROR_MODE=sticky (DramModel.io.sticky), an input so that one build runs both
     val received = Output(UInt(32.W))
     val sent = Output(UInt(32.W))
     val tlasts = Output(UInt(32.W))   // hit beats that carried TLAST
@@ -77,6 +78,7 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val cfg = if (k == 0) s.dram else s.dram.copy(seed = ((s.dram.seed + SimSetup.channelSeedStep * k) & 0xffff) | 1)
     val d = Module(new DramModel(top.axiP, s.imageWords, s.imageHex, cfg, p.hw.dramQueueDepth))
     d.io.axi <> port
+    d.io.sticky := io.errorSticky
     d
   }
   top.io.lite <> io.lite

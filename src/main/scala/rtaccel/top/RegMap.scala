@@ -26,7 +26,7 @@ object RegMap {
 
   /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
   val VersionMajor = 2
-  val VersionMinor = 8
+  val VersionMinor = 9
   val Magic: Long = 0x52544143L // "RTAC"
 
   val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
@@ -58,6 +58,7 @@ object RegMap {
     Field("RESP_TAGGED", 19, 1, "1 = RESP_ORDER=tagged: each stream answers in any order, tagged by TU (hits under misses; RESP_ORDER is 1 too)"),
     Field("RAY_STORE", 20, 1, "1 = RAY_STORE=1: each IU keeps its TUs' rays in a ray store; requests carry the TU's index, not the ray"),
     Field("TAG_FORWARD", 21, 1, "1 = TAG_FORWARD=1: every cache path's tags take one lookup per cycle (0: one per two cycles)"),
+    Field("MEM_RETRIES", 22, 2, "MEM_RETRIES: re-reads of a burst the memory answered with SLVERR before its rays are flagged (0: flagged at once)"),
     Field("IUS", 24, 8, "intersection units (IU clusters, each with its own MC and caches; CONFIG0.TUS / IUS TUs each)")))
   val Control = Reg("CONTROL", 0x020, WP, "commands", Seq(
     Field("START", 0, 1, "start a batch of RAY_COUNT rays"), Field("SOFT_RESET", 1, 1,

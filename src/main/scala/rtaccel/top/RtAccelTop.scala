@@ -27,7 +27,7 @@ object RtAccelTop {
   /** Counted by the memory controller (not cleared by the control register). */
   val memoryNames: Seq[String] = Seq("node_requests", "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats",
     "node_cache_hits", "node_cache_misses", "node_cache_bypasses", "prim_cache_hits", "prim_cache_misses", "prim_cache_bypasses",
-    "mem_read_errors")
+    "mem_read_errors", "mem_retries")
   val counterNames: Seq[String] = eventNames ++ memoryNames
 
   /** The read-only configuration registers of RegMap: what a host driver checks before it uploads anything. */
@@ -53,7 +53,8 @@ object RtAccelTop {
         "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
       Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
         "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L), "RESP_TAGGED" -> (if (p.respTagged) 1L else 0L),
-        "RAY_STORE" -> (if (p.rayStore) 1L else 0L), "TAG_FORWARD" -> (if (p.tagForward) 1L else 0L)),
+        "RAY_STORE" -> (if (p.rayStore) 1L else 0L), "TAG_FORWARD" -> (if (p.tagForward) 1L else 0L),
+        "MEM_RETRIES" -> p.memRetries.toLong),
       // latencies past 255 cycles read 255
       Pipeline -> word(Pipeline, "BUDGET" -> p.stageBudget.getOrElse(0).toLong, "BOX_LATENCY" -> math.min(255, lat.box).toLong,
         "TRI_LATENCY" -> math.min(255, lat.tri).toLong, "PREP_LATENCY" -> math.min(255, lat.prep).toLong))
@@ -210,5 +211,5 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val mcc = rtaccel.mc.McCounters.sum(mcs.map(_.io.counters) ++ nodeBanks.toSeq.flatMap(_.io.counters)) // in memoryNames order
   regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
     mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,
-    mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses, mcc.readErrors).map(_.pad(64)))
+    mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses, mcc.readErrors, mcc.retries).map(_.pad(64)))
 }

@@ -29,10 +29,11 @@ class StallingPath(g: McGeometry, seed: Int) extends FetchPathModule(g) {
 /** MC + DRAM model, with AR/R traffic counters for the test. */
 class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, cfg: DramConfig,
                 pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
-                respBufferBeats: Int = 0) extends Module {
+                respBufferBeats: Int = 0, errorSticky: Boolean = true) extends Module {
   val mc = Module(new MemoryController(p, axi, pathFactory = pathFactory, respBufferBeats = respBufferBeats))
   val dram = Module(new DramModel(axi, words, hex, cfg))
   dram.io.axi <> mc.io.axi
+  dram.io.sticky := errorSticky.B
   val io = IO(new Bundle {
     val req = Flipped(chisel3.util.Decoupled(new FetchReq(p.respTagBits)))
     val resp = chisel3.util.Decoupled(new FetchBeat(axi.dataBits, p.respTagBits))
@@ -99,13 +100,15 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               pick: (Random, IndexedSeq[Int]) => Int = (r, pool) => pool(r.nextInt(pool.length)),
               afterRun: (McHarness, Seq[Int], MemoryImage) => Unit = (_, _, _) => (),
               annotations: firrtl2.AnnotationSeq = Seq(), respByPath: Boolean = false, tagged: Int = 0,
-              tagForward: Boolean = false): Unit =
+              tagForward: Boolean = false, memRetries: Int = -1, errorSticky: Boolean = true): Unit =
     it should name in {
       val axi = AxiParams(dataBits = dataBits)
       val img = image(seed, tris, refFormat)
       // tagged > 0: RESP_ORDER=tagged with that many requesters (the TUs), each with at most one request in flight
       val p = (if (tagged > 0) img.p.copy(tus = tagged, respByPath = true, respTagged = true) else img.p.copy(respByPath = respByPath))
         .copy(tagForward = tagForward)
+        // MEM_RETRIES: the preset's where the MC has response buffers (re-reads need them), else 0
+        .copy(memRetries = if (memRetries >= 0) memRetries else if (respBufferBeats > 0) img.p.memRetries else 0)
       val codec = new RefCodec(p.refs)
       val hex = Files.createTempDirectory("mc").resolve("img.hex").toAbsolutePath
       val lay = ImageFile.write(img, axi, hex)
@@ -116,10 +119,33 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
       def span(ref: Int): (Long, Int) =
         if (codec.isPrim(ref)) (lay.primBaseBytes + 64L * codec.firstPrim(ref), 64 * codec.count(ref))
         else (codec.nodeId(ref).toLong * p.nodeStrideBytes, p.nodeStrideBytes)
+      // DRAM errors (cfg.errorThreshold): what each request's beats carry, and the re-reads the MC makes. Every read
+      // reaches DRAM (no cache here) in its path's request order, and the two paths' beats never overlap, so the
+      // transient errors a read spends are known from the request order: a read fails if it holds a poisoned beat
+      // not spent yet (sticky: any poisoned beat); it is re-read min(1, MEM_RETRIES) times if transient (the re-read is
+      // clean), MEM_RETRIES times if sticky; the beats delivered are inverted where the last read failed.
+      val faults = rtaccel.model.MemFaults(cfg.errorThreshold, cfg.errorSeed, axi.beatBytes, 64, 0, 64)
+      val spent = scala.collection.mutable.Set[Long]()
+      val inverted = Array.fill(refs.length)(Set.empty[Long]); var expectRetries = 0L; var reReadBeats = 0L
+      for (j <- refs.indices) {
+        val (a, n) = span(refs(j))
+        val bad = (a / axi.beatBytes until (a + n) / axi.beatBytes).filter(faults.beatBad).toSet
+        val failing = if (errorSticky) bad else bad -- spent
+        spent ++= bad
+        if (failing.nonEmpty) {
+          val k = if (errorSticky) p.memRetries else math.min(1, p.memRetries)
+          expectRetries += k; reReadBeats += k * (n / axi.beatBytes)
+        }
+        inverted(j) = if (errorSticky || p.memRetries == 0) failing else Set.empty
+      }
+      val allOnes = (BigInt(1) << axi.dataBits) - 1
       // each beat with the index of the request it answers
       def beatsOf(ix: Seq[Int]) = ix.flatMap { j =>
         val (a, n) = span(refs(j)); val k = n / axi.beatBytes
-        (0 until k).map(i => ((beat(bytes, a + i * axi.beatBytes, axi), i == k - 1), j))
+        (0 until k).map { i =>
+          val d = beat(bytes, a + i * axi.beatBytes, axi)
+          ((if (inverted(j)(a / axi.beatBytes + i)) d ^ allOnes else d, i == k - 1), j)
+        }
       }
       // RESP_ORDER=request: one stream of every beat in request order; path: node beats and leaf beats, each in
       // its own request order
@@ -130,7 +156,7 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
       val inFlight = Array.fill(math.max(1, tagged))(-1)
       val underWay = Array.fill(streams.length)(Option.empty[(Int, Int, Int)])
       var tag = 0
-      test(new McHarness(p, axi, lay.words, hex.toString, cfg, pathFactory, respBufferBeats)).withAnnotations(annotations) { dut =>
+      test(new McHarness(p, axi, lay.words, hex.toString, cfg, pathFactory, respBufferBeats, errorSticky)).withAnnotations(annotations) { dut =>
         dut.clock.setTimeout(0)
         dut.io.primBase.poke(lay.primBaseBytes.U)
         dut.io.maxLevel.poke(maxLevel.U)
@@ -193,16 +219,22 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
         assert(dut.io.counters.leafRequests.peek().litValue == leaves.length)
         assert(dut.io.counters.primsRequested.peek().litValue == prims)
         assert(dut.io.counters.bytesRequested.peek().litValue == totalBytes)
-        if (pathFactory eq FetchPath.passThrough) assert(dut.io.counters.busyBeats.peek().litValue == expected.length)
+        if (pathFactory eq FetchPath.passThrough) assert(dut.io.counters.busyBeats.peek().litValue == expected.length + reReadBeats)
         assert(!dut.io.badBurst.peek().litToBoolean, "an AR burst crossed 4 KB or had a bad id/burst type")
         val bursts = dut.io.arBursts.peek().litValue
         info(f"${refs.length} refs (${leaves.length} leaves, $prims prims), ${expected.length} beats in $cyc cycles " +
           f"(${totalBytes.toDouble / cyc}%.2f B/cycle), $bursts AR bursts, max len ${dut.io.maxLen.peek().litValue}, " +
           s"max outstanding $maxOutstanding")
         if (pathFactory eq FetchPath.passThrough) assert(bursts >= refs.length) // a cache serves hits without DRAM
+        if (cfg.errorThreshold > 0) {
+          val (retries, errBeats) = (dut.io.counters.retries.peek().litValue, dut.io.counters.readErrors.peek().litValue)
+          info(s"$errBeats beats answered with an error, $retries re-reads (expected $expectRetries)")
+          assert(retries == expectRetries, s"$retries re-reads, expected $expectRetries")
+        } else assert(dut.io.counters.retries.peek().litValue == 0)
         val overtaken = dut.io.overtaken.peek().litValue
         info(s"$overtaken beats arrived for the other path than the one awaited")
-        if (pathFactory eq FetchPath.passThrough) assert(overtaken == 0)
+        // response buffers let one pass-through path's reads go ahead while the other's wait for room
+        if ((pathFactory eq FetchPath.passThrough) && respBufferBeats == 0) assert(overtaken == 0)
         if (tagged > 0) info(s"$overtook answers began ahead of an older request's on their port")
         else if (respByPath) info(s"$overtook node beats left ahead of an older unanswered leaf")
         overtakes = overtook
@@ -214,7 +246,8 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
 class MemoryControllerSpec extends McCases {
 
   "MemoryController" should "emit SystemVerilog for the paper preset" in {
-    val sv = _root_.circt.stage.ChiselStage.emitSystemVerilog(new MemoryController(rtaccel.config.Presets.paper2017, AxiParams()),
+    val p = rtaccel.config.Presets.paper2017
+    val sv = _root_.circt.stage.ChiselStage.emitSystemVerilog(new MemoryController(p, AxiParams(), respBufferBeats = 2 * McGeometry(p, AxiParams()).maxBeats),
       firtoolOpts = Array("-disable-all-randomization", "-strip-debug-info"))
     val out = java.nio.file.Paths.get("build/verilog/MemoryController.sv")
     Files.createDirectories(out.getParent)
@@ -259,6 +292,27 @@ class MemoryControllerSpec extends McCases {
     afterRun = (_, _, _) => assert(overtakes > 0, "no node beat left ahead of an older leaf: the streams are not independent"))
   runCase("answer both streams under a saturated DRAM (pass-through paths, paper timing)", dataBits = 256, tris = 300,
     nReqs = 100, DramConfig.paper, reqProb = 1.0, readyProb = 0.7, seed = 26, respBufferBeats = 16, respByPath = true)
+  behavior of "MemoryController with MEM_RETRIES"
+
+  // Poisoned beats (about 1 in 20) under random latency and backpressure, a stalling node path so that the re-reads
+  // and later reads of both paths interleave; every beat is checked against the image, with the re-reads counted.
+  private val errors = DramConfig(8, 8, 1, randomExtraLatency = 7, seed = 9, errorThreshold = 3300, errorSeed = 77)
+  runCase("re-read transient errors: every beat clean, one re-read per failed read", dataBits = 256, tris = 300,
+    nReqs = 90, errors, reqProb = 0.9, readyProb = 0.6, seed = 27, respBufferBeats = 40, maxCycles = 8000,
+    pathFactory = (g, i) => if (i == FetchPath.Node) new StallingPath(g, 0x33) else new FetchPath(g),
+    memRetries = 1, errorSticky = false)
+  runCase("re-read sticky errors MEM_RETRIES times, then deliver them marked (two streams)", dataBits = 256, tris = 300,
+    nReqs = 60, errors, reqProb = 0.9, readyProb = 0.6, seed = 28, respBufferBeats = 40, maxCycles = 8000,
+    respByPath = true, memRetries = 2, errorSticky = true)
+  runCase("deliver a transient error at once with MEM_RETRIES=0 (the re-read of the same beat is clean)", dataBits = 256,
+    tris = 300, nReqs = 90, errors, reqProb = 0.9, readyProb = 0.6, seed = 29, respBufferBeats = 40, maxCycles = 8000,
+    memRetries = 0, errorSticky = false)
+  it should "refuse MEM_RETRIES without response buffers" in {
+    val e = intercept[IllegalArgumentException](_root_.circt.stage.ChiselStage.emitCHIRRTL(
+      new MemoryController(rtaccel.config.Presets.paper2017.copy(memRetries = 1), AxiParams())))
+    assert(e.getMessage.contains("MEM_RETRIES=1") && e.getMessage.contains("respBufferBeats"))
+  }
+
   it should "refuse RESP_ORDER=path without response buffers" in {
     val e = intercept[IllegalArgumentException](_root_.circt.stage.ChiselStage.emitCHIRRTL(
       new MemoryController(rtaccel.config.Presets.paper2017.copy(respByPath = true), AxiParams())))
