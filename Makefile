@@ -231,7 +231,7 @@ lint: verilog verilator
 	verilator --lint-only -Wall $(LINT_WAIVERS) --top-module RtAccelTop build/$(VCONFIG)/*.sv && echo "[lint] build/$(VCONFIG): verilator -Wall clean"
 
 SIM_ARGS = $(if $(MEM_JITTER),--mem-jitter $(MEM_JITTER)) $(if $(HOST_STALL),--host-stall $(HOST_STALL)) \
-  $(if $(MEM_ERROR_RATE),--mem-error-rate $(MEM_ERROR_RATE)) $(if $(WAVES),--waves $(WAVES)) \
+  $(if $(MEM_ERROR_RATE),--mem-error-rate $(MEM_ERROR_RATE)) $(if $(MEM_ERROR_MODE),--mem-error-mode $(MEM_ERROR_MODE)) $(if $(WAVES),--waves $(WAVES)) \
   $(if $(WAVES_FROM),--waves-from $(WAVES_FROM)) $(if $(WAVES_TO),--waves-to $(WAVES_TO)) $(if $(SIM_BUILD),--sim-build $(SIM_BUILD))
 # Exit status: 0 every check held, 2 bad input, 3 ran but a check failed (the JSON line and outputs remain).
 simulate: deps

@@ -34,6 +34,7 @@ object Flags {
     f("host-stall", "host backpressure percentage"), f("seed", "random seed of jitter and stalls"),
     f("work", "simulator build folder"), f("max-cycles", "cycle limit (a run that reaches it timed out)"),
     f("mem-error-rate", "share of DRAM beats answered with SLVERR (MEM_ERROR_RATE, 0..1)"),
+    f("mem-error-mode", "transient (a poisoned beat fails its first read only, the default) or sticky (every read) (MEM_ERROR_MODE)"),
     f("waves", "1 writes OUT/waves.vcd (WAVES=)"), f("waves-from", "first cycle of the waveform window"),
     f("waves-to", "last cycle of the waveform window"),
     f("sim-build", "Verilator build profile (SIM_BUILD=, rtaccel.sim.VerilatorBuild)"))

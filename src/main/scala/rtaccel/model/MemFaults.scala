@@ -1,9 +1,10 @@
 package rtaccel.model
 
-/** Poisoned DRAM beats: the simulation's memory-error injection (MEM_ERROR_RATE), known to the model so that
-  * the RTL's fault handling can be checked ray by ray. A beat is poisoned by its index in memory (byte
-  * address / beat bytes), not by when it is read: like a bad DRAM cell, every read of it fails, through a
-  * cache too (a cached beat keeps its error bit), so the affected rays do not depend on timing.
+/** Poisoned DRAM beats: the simulation's memory-error injection (MEM_ERROR_RATE), known to the model
+  * so that the RTL's fault handling can be checked ray by ray. A beat is poisoned by its index in memory (byte
+  * address / beat bytes), not by when it is read. With MEM_ERROR_MODE=sticky, like a bad DRAM cell, every read of it
+  * fails, through a cache too (a cached beat keeps its error bit), so the affected rays do not depend on timing;
+  * transient, only its first read fails (MemoryController re-reads it with MEM_RETRIES).
   * `threshold` of 65536: each beat is poisoned with probability threshold / 65536 (0 = no errors).
   * The hash is simple 32-bit integer arithmetic so that the DRAM model computes it identically in hardware
   * (sim.DramModel).
@@ -26,6 +27,17 @@ final case class MemFaults(threshold: Int, seed: Int, beatBytes: Int, nodeStride
 
 object MemFaults {
   val One: Int = 1 << 16
+  /** MEM_ERROR_MODE: a poisoned beat fails its first read only (transient, like a soft error the read corrects) or
+    * every read (sticky, like a bad cell). The model's rays see the sticky case; PlatformRun says what the transient
+    * one leaves to check. */
+  val Transient = "transient"
+  val Sticky = "sticky"
+  val modes: Seq[String] = Seq(Transient, Sticky)
+  def sticky(mode: String): Boolean = mode.toLowerCase match {
+    case Sticky => true
+    case Transient => false
+    case m => throw new rtaccel.io.InputError(s"MEM_ERROR_MODE=$m: MEM_ERROR_MODE takes ${modes.mkString(" or ")}")
+  }
   val none: MemFaults = MemFaults(0, 1, 32, 128, 0, 64)
   /** MEM_ERROR_RATE in [0, 1] as a threshold of 65536. */
   def threshold(rate: Double): Int = {

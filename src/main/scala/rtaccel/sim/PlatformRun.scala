@@ -45,8 +45,10 @@ object PlatformRun {
   final case class SimOptions(label: String, memJitter: Int = 0, hostStall: Int = 0, seed: Int = 1,
                               work: String = "build/sim", maxCycles: Option[Long] = None, scaleExp: Int = 0,
                               memErrorRate: Double = 0.0, waves: Option[(Long, Long)] = None,
-                              build: Option[rtaccel.sim.VerilatorBuild] = None) { // None: VerilatorBuild.auto
+                              build: Option[rtaccel.sim.VerilatorBuild] = None, // None: VerilatorBuild.auto
+                              memErrorMode: String = MemFaults.Transient) {
     val errorThreshold: Int = rtaccel.model.MemFaults.threshold(memErrorRate)
+    val errorSticky: Boolean = MemFaults.sticky(memErrorMode)
   }
 
   /** The hit stream as the host captured it, by ray id: each record, how often it came, its fault flags. */
@@ -72,16 +74,21 @@ object PlatformRun {
   /** RTL against the model, ray by ray: raw bits of every field, and each fault flag against the model's record. */
   final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int)
 
-  private def compare(rtl: RtlHits, model: Hits, flags: RayStats): Comparison = {
+  /** `mayFail`: MEM_ERROR_MODE=transient with MEM_RETRIES=0, where which ray first reads a poisoned beat depends on
+    * timing: the rays that may come back flagged read error (those whose traversal reads a poisoned beat). Such a ray
+    * agrees when the RTL flagged it (its traversal stopped there, whatever else it met) or returned the model's record;
+    * every other ray must equal the model. */
+  private def compare(rtl: RtlHits, model: Hits, flags: RayStats, mayFail: Option[scala.collection.BitSet]): Comparison = {
     def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
     val h = rtl.hits; val got = rtl.seen.indices.filter(rtl.seen(_) >= 1)
+    val excused = (i: Int) => mayFail.exists(m => m(i) && rtl.readError(i) && h.prim(i) == rtaccel.scene.Hits.ReadError)
     Comparison(
-      mismatch = got.count(i => h.prim(i) != model.prim(i) || bits(h.t(i)) != bits(model.t(i)) ||
-        bits(h.u(i)) != bits(model.u(i)) || bits(h.v(i)) != bits(model.v(i))),
+      mismatch = got.count(i => !excused(i) && (h.prim(i) != model.prim(i) || bits(h.t(i)) != bits(model.t(i)) ||
+        bits(h.u(i)) != bits(model.u(i)) || bits(h.v(i)) != bits(model.v(i)))),
       lost = rtl.seen.count(_ == 0),
       // each flag against the model's own flag: a ray that overflowed and read an error carries both
-      overflowDisagree = got.count(i => rtl.overflow(i) != flags.overflowRays(i)),
-      readErrorDisagree = got.count(i => rtl.readError(i) != flags.readErrorRays(i)))
+      overflowDisagree = got.count(i => !excused(i) && rtl.overflow(i) != flags.overflowRays(i)),
+      readErrorDisagree = got.count(i => !excused(i) && rtl.readError(i) != flags.readErrorRays(i)))
   }
 
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
@@ -108,7 +115,17 @@ object PlatformRun {
     val tModel = System.nanoTime()
     val stats = new RayStats
     val rec = new AccessRecorder
-    val model = new Traversal(img, faults).traceAll(rays, if (cached) rec else AccessSink.none, stats)
+    // what the rays see (MEM_ERROR_MODE, docs/platform.md "Memory errors"): a sticky error stays through every re-read
+    // and cache, so exactly the rays that read a poisoned beat are flagged; a transient one fails one read and its
+    // re-read is clean, so with MEM_RETRIES > 0 no ray is, and with 0 the ray that reads it first (timing decides
+    // which: any ray that reads a poisoned beat may be flagged, and the others equal the fault-free model)
+    val seen = if (o.errorSticky) faults else MemFaults.none
+    val model = new Traversal(img, seen).traceAll(rays, if (cached) rec else AccessSink.none, stats)
+    val mayFail = if (o.errorSticky || p.memRetries > 0 || !faults.enabled) None else {
+      val s = new RayStats
+      new Traversal(img, faults).traceAll(rays, AccessSink.none, s)
+      Some(s.readErrorRays)
+    }
     val accessRows = rec.toArray
     // the RTL logs its access order only when a cache is present; it makes exactly the model's accesses
     val logCap = if (cached) SimSetup.capacity(accessRows.length / 5, SimSetup.minLogEntries) else 0
@@ -154,6 +171,7 @@ object PlatformRun {
       dut.clock.setTimeout(0)
       dut.io.readIdx.poke(0.U)
       dut.io.rayCount.poke(rays.count.U) // what the host's stream holds
+      dut.io.errorSticky.poke(o.errorSticky.B)
       // The host driver's sequence (docs/registers.md, "Driver contract"): the image is in DRAM already.
       val host = new HostDriver(dut.io.lite, dut.clock)
       host.idle()
@@ -185,7 +203,7 @@ object PlatformRun {
       val rtl = readHits(dut, received, rays.count)
       val hits = rtl.hits
       val tHits = System.nanoTime()
-      val cmp = compare(rtl, model, stats)
+      val cmp = compare(rtl, model, stats, mayFail)
       import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree}
       val (rtlOverflow, rtlReadError) = (rtl.overflow, rtl.readError)
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
@@ -234,8 +252,10 @@ object PlatformRun {
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> nReadError,
         "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,
         "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
+        "mem_error_mode" -> (if (o.errorSticky) MemFaults.Sticky else MemFaults.Transient), "mem_retry_limit" -> p.memRetries,
+        "mem_retries" -> counters("mem_retries").toDouble,
         "health" -> ujson.Obj("usable" -> usable, "read_error" -> nReadError, "overflow" -> nOverflow,
-          "error_beats" -> counters("mem_read_errors").toDouble),
+          "retries" -> counters("mem_retries").toDouble, "error_beats" -> counters("mem_read_errors").toDouble),
         "hit_tlast" -> ujson.Obj("beats" -> tlasts.toDouble, "at" -> tlastAt.toDouble),
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
         "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,
