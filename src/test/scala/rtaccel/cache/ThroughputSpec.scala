@@ -38,9 +38,10 @@ class ThroughputSpec extends AnyFunSuite {
     val (bx, tx) = rtaccel.iu.PipeLatencies.extraOverFixed(Presets.paper2017)
     assert(bx > 0 && tx > 0 && Presets.paper2017.accessSliceCycles == 6 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 3)
     assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 9)
-    // without a cache (one cluster, one channel, request order) there are no response buffers and no path slice
-    val bare = Presets.paper2017.copy(nodeCache = CacheParams())
-    assert(bare.passSliceCycles == 0 && bare.copy(ius = 2).passSliceCycles == 3)
+    // without a cache (one cluster, one channel, request order) and without re-reads (MEM_RETRIES=0) there are no
+    // response buffers and no path slice; re-reads need the buffers
+    val bare = Presets.paper2017.copy(nodeCache = CacheParams(), memRetries = 0)
+    assert(bare.passSliceCycles == 0 && bare.copy(ius = 2).passSliceCycles == 3 && bare.copy(memRetries = 1).passSliceCycles == 3)
     assert(Throughput.predict(bare, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 6)
     // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:
     // (2 x 232 - 2 x 72 + 2 x 4 + 4 x path) / 2, by hand for two path latencies
