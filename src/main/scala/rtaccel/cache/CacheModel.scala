@@ -59,6 +59,9 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
   var hits = 0L; var misses = 0L; var bypasses = 0L
 
   def accesses: Long = hits + misses
+  /** The RTL refetched the line the access just hit, because its data was poisoned (rtaccel.cache.hw.CachePath):
+    * the hit counts as a miss; the replacement state stays as the hit left it, as in the RTL. */
+  def countRefetch(): Unit = { hits -= 1; misses += 1 }
   def missRate: Double = if (accesses == 0) 0.0 else misses.toDouble / accesses
 
   /** One request; true on a hit. */

@@ -10,7 +10,10 @@ import rtaccel.config.{CacheParams, PlatformParams}
 object CacheReport {
   final case class Report(node: ujson.Value, prim: ujson.Value, matches: ujson.Value)
 
-  def simulate(p: PlatformParams, counters: Map[String, Long], logged: Seq[Array[Int]], rows: Array[Int], codec: RefCodec): Report = {
+  /** `refetched(m)`: MC m's logged refetches of poisoned lines, each (path << 31 | its index among the path's lookups),
+    * as SimHarness writes them. */
+  def simulate(p: PlatformParams, counters: Map[String, Long], logged: Seq[Array[Int]], rows: Array[Int], codec: RefCodec,
+               refetched: Seq[Array[Int]] = Nil): Report = {
     val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
     if (!cached) return Report(absent, absent, ujson.Null)
     require(logged.length == p.memControllers, s"one access log per MC: ${logged.length} logs for IUS=${p.ius} NODE_BANKS=${p.nodeBanks}")
@@ -18,10 +21,14 @@ object CacheReport {
     // logs after the clusters' are the node banks', each the order its bank saw, replayed into the one shared node
     // cache model (banked as the RTL is: each bank's sets see exactly that bank's order)
     val clusters = new ClusterSinks(p)
-    for ((log, c) <- logged.zipWithIndex) Replay.refs(log, codec, clusters.sinks(math.min(c, p.ius - 1)))
+    for ((log, c) <- logged.zipWithIndex) {
+      val words = refetched.lift(c).getOrElse(Array.empty[Int])
+      val byPath = Seq(0, 1).map(path => words.filter(w => (w >>> 31) == path).map(w => (w & 0x7fffffff).toLong).toSet)
+      Replay.refs(log, codec, clusters.sinks(math.min(c, p.ius - 1)), byPath)
+    }
     val same = clusters.total; val geometry = clusters.sinks.head // the clusters' caches are alike
     val interC = new ClusterSinks(p); Replay.clustered(rows, p, interC); val inter = interC.total
-    var ok = true
+    var ok = clusters.sinks.forall(_.refetchesOnMiss == 0)
     def one(name: String, c: CacheParams, g: Option[CacheModel], sameM: Option[CacheCounts], interM: Option[CacheCounts]): ujson.Value = (g, sameM, interM) match {
       case (Some(g), Some(s), Some(i)) =>
         val h = counters(s"${name}_cache_hits"); val m = counters(s"${name}_cache_misses"); val b = counters(s"${name}_cache_bypasses")

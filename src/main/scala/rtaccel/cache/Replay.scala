@@ -13,15 +13,27 @@ final class CacheSink(val nodeCache: Option[CacheModel], val primCache: Option[C
   var primTests = 0L
   /** Primitive bytes of every leaf access, cached or not (what DRAM would move without the primitive cache). */
   var primBytesAll = 0L
-  def node(ray: Int, id: Int, level: Int): Unit = {
+  /** Lookups the RTL refetched (a poisoned line) that the model did not hit: the replay went astray. */
+  var refetchesOnMiss = 0L
+  private def lookup(c: Option[CacheModel], id: Int, level: Int, refetch: Boolean): Boolean = c match {
+    case Some(m) =>
+      val hit = m.access(id, level)
+      if (refetch && !hit) refetchesOnMiss += 1
+      if (refetch && hit) { m.countRefetch(); false } else hit
+    case None => false
+  }
+  def node(ray: Int, id: Int, level: Int): Unit = node(ray, id, level, refetch = false)
+  def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = leaf(ray, firstPrim, count, level, refetch = false)
+  /** `refetch`: the RTL's lookup found the line poisoned and read it again (CacheReport replays the RTL's log) */
+  def node(ray: Int, id: Int, level: Int, refetch: Boolean): Unit = {
     nodeAccesses += 1
-    val hit = nodeCache match { case Some(c) => c.access(id, level); case None => false }
+    val hit = lookup(nodeCache, id, level, refetch)
     if (!hit) nodeDramBytes += nodeBytes
   }
-  def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = {
+  def leaf(ray: Int, firstPrim: Int, count: Int, level: Int, refetch: Boolean): Unit = {
     leafAccesses += 1; primTests += count
     val bytes = leafBytes(count); primBytesAll += bytes
-    val hit = primCache match { case Some(c) => c.access(firstPrim, level); case None => false }
+    val hit = lookup(primCache, firstPrim, level, refetch)
     if (!hit) primDramBytes += bytes
   }
   def counts: SinkCounts = SinkCounts(nodeAccesses, leafAccesses, nodeDramBytes, primDramBytes, primTests, primBytesAll,
@@ -71,13 +83,23 @@ object Replay {
   /** Replays child references in the order the RTL's memory controller accepted them (its access log): node
     * refs carry their level field (the cache model saturates it to its level code, as the MC does for the RTL
     * caches), leaf refs their first slot and count. Ray numbers are not in the log (-1).
+    * `refetched(path)`: the indices, among that path's lookups (FetchPath.Node / Prim), of those the RTL's cache
+    * turned into refetches of a poisoned line (SimHarness logs them).
     */
-  def refs(log: Array[Int], codec: rtaccel.bvh.RefCodec, sink: AccessSink): Unit = {
+  def refs(log: Array[Int], codec: rtaccel.bvh.RefCodec, sink: AccessSink,
+           refetched: Seq[Set[Long]] = Seq(Set.empty, Set.empty)): Unit = {
     var i = 0
+    val k = Array(0L, 0L)
     while (i < log.length) {
       val r = log(i)
-      if (codec.isPrim(r)) sink.leaf(-1, codec.firstPrim(r), codec.count(r), 0)
-      else sink.node(-1, codec.nodeId(r), codec.level(r))
+      val path = if (codec.isPrim(r)) rtaccel.mc.FetchPath.Prim else rtaccel.mc.FetchPath.Node
+      val refetch = refetched(path)(k(path)); k(path) += 1
+      (sink, path) match {
+        case (c: CacheSink, rtaccel.mc.FetchPath.Prim) => c.leaf(-1, codec.firstPrim(r), codec.count(r), 0, refetch)
+        case (c: CacheSink, _) => c.node(-1, codec.nodeId(r), codec.level(r), refetch)
+        case (s, rtaccel.mc.FetchPath.Prim) => require(!refetch, "refetches replay into cache models only"); s.leaf(-1, codec.firstPrim(r), codec.count(r), 0)
+        case (s, _) => require(!refetch, "refetches replay into cache models only"); s.node(-1, codec.nodeId(r), codec.level(r))
+      }
       i += 1
     }
   }

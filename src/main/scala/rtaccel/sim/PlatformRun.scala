@@ -219,8 +219,15 @@ object PlatformRun {
         }
         a
       }
+      // the lookups the caches turned into refetches of a poisoned line, per MC
+      val refetched = if (!cached) Nil else Seq.tabulate(p.memControllers) { c =>
+        val n = dut.io.refetchCount(c).peek().litValue.toInt
+        if (n > SimSetup.refetchLogEntries)
+          throw new InputError(s"the caches refetched $n poisoned lines, more than the simulator logs (${SimSetup.refetchLogEntries}); lower MEM_ERROR_RATE")
+        (0 until n).map { k => dut.io.readIdx.poke(k.U); dut.io.refetchData(c).peek().litValue.toInt }.toArray
+      }
       val tLog = System.nanoTime()
-      val cacheJson = CacheReport.simulate(p, counters, logged, accessRows, img.codec)
+      val cacheJson = CacheReport.simulate(p, counters, logged, accessRows, img.codec, refetched)
       System.err.println(f"[simulate] readout: hits ${(tHits - tEnd) / 1e9}%.1f s, access log ${(tLog - tHits) / 1e9}%.1f s " +
         f"(${logged.map(_.length).sum} entries), cache check ${(System.nanoTime() - tLog) / 1e9}%.1f s")
       val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
@@ -254,6 +261,8 @@ object PlatformRun {
         "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
         "mem_error_mode" -> (if (o.errorSticky) MemFaults.Sticky else MemFaults.Transient), "mem_retry_limit" -> p.memRetries,
         "mem_retries" -> counters("mem_retries").toDouble,
+        // lookups that found their line poisoned (an errored fill) and read it again (null without a cache)
+        "poison_refetches" -> (if (cached) ujson.Num(refetched.map(_.length).sum) else ujson.Null),
         "health" -> ujson.Obj("usable" -> usable, "read_error" -> nReadError, "overflow" -> nOverflow,
           "retries" -> counters("mem_retries").toDouble, "error_beats" -> counters("mem_read_errors").toDouble),
         "hit_tlast" -> ujson.Obj("beats" -> tlasts.toDouble, "at" -> tlastAt.toDouble),

@@ -40,6 +40,9 @@ object SimSetup {
   val minRays: Int = 1 << 17
   val minImageBytes: Long = 64L << 20
   val minLogEntries: Int = 1 << 21
+  /** Refetches of poisoned cache lines logged per MC (one per errored fill a later lookup met, and its repeats): a run
+    * that makes more is refused rather than compared on a partial log. */
+  val refetchLogEntries: Int = 1 << 14
   /** The capacity of a build that must hold `n` entries: a power of two, at least `floor`. */
   def capacity(n: Long, floor: Long): Int = pow2(math.max(n, floor))
 }
@@ -71,6 +74,10 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     // (then per node bank with NODE_BANKS: one log per MC, p.memControllers)
     val logCount = Output(Vec(p.memControllers, UInt(32.W)))
     val logData = Output(Vec(p.memControllers, UInt((32 * SimSetup.logWords).W)))
+    // per MC: the lookups its caches turned into refetches of a poisoned line (CachePath.eForced), each as its path
+    // (bit 31: primitive) and its index among that path's lookups; entry readIdx
+    val refetchCount = Output(Vec(p.memControllers, UInt(32.W)))
+    val refetchData = Output(Vec(p.memControllers, UInt(32.W)))
   })
   // one DRAM model per memory channel, each holding the whole image (the channel only decides who serves an
   // address) with its own bandwidth and latency; channel k > 0 draws its jitter from its own seed
@@ -112,6 +119,31 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
 
   io.logCount.foreach(_ := 0.U)
   io.logData.foreach(_ := 0.U)
+  io.refetchCount.foreach(_ := 0.U)
+  io.refetchData.foreach(_ := 0.U)
+  if (s.accessLogCapacity > 0) {
+    import chisel3.util.experimental.BoringUtils
+    val mcs = top.mcs ++ top.nodeBanks.toSeq.flatMap(_.banks)
+    for ((mc, m) <- mcs.zipWithIndex) {
+      val count = RegInit(0.U(32.W))
+      val log = Mem(SimSetup.refetchLogEntries, UInt(32.W))
+      // each cache path's refetches this cycle (at most one per path), entered in path order
+      val events = mc.paths.zipWithIndex.collect { case (c: rtaccel.cache.hw.CachePath, i) =>
+        val (fire, forced) = (BoringUtils.bore(c.eFire), BoringUtils.bore(c.eForced))
+        val lookups = RegInit(0.U(31.W))
+        when(fire) { lookups := lookups + 1.U }
+        (fire && forced, Cat(i.U(1.W), lookups))
+      }
+      var at = count
+      for ((ev, word) <- events) {
+        when(ev && at < SimSetup.refetchLogEntries.U) { log.write(at(log2Ceil(SimSetup.refetchLogEntries) - 1, 0), word) }
+        at = at + ev.asUInt
+      }
+      count := at
+      io.refetchCount(m) := count
+      io.refetchData(m) := log(io.readIdx(log2Ceil(SimSetup.refetchLogEntries) - 1, 0))
+    }
+  }
   // every cluster's log holds ALL accesses (accessLogCapacity, sized for the whole run), not a 1/IUS share: the
   // controller hands a ray to the lowest-numbered free TU, so a cluster can make any share of the accesses (cluster 0
   // all of them when the batch has no more rays than a cluster has TUs) and a share-sized log could overflow.

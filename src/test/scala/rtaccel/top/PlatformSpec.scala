@@ -137,6 +137,8 @@ class PlatformSpec extends AnyFunSuite {
       assert(j("mem_error_beats").num > 0 && j("mem_error_beats").num == j("counters")("mem_read_errors").num)
       // every failed read is read once more and fails again: as many error beats again as re-reads bring
       assert(j("mem_retries").num > 0 && j("mem_error_beats").num >= 2 * j("mem_retries").num, ujson.write(j))
+      // no errored fill stays a good line: later lookups refetch it (and fail again), replayed by the trace model
+      if (node.entries > 0) assert(j("poison_refetches").num > 0, "no lookup met a poisoned line")
       val t = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = rate, seed = seed, stack = stack,
         errorMode = MemFaults.Transient).json
       info(f"transient: ${t("read_errors").num}%.0f rays flagged, ${t("mem_error_beats").num}%.0f error beats, ${t("mem_retries").num}%.0f re-reads, ${t("health")("usable").num}%.0f usable")
@@ -228,16 +230,21 @@ class PlatformSpec extends AnyFunSuite {
       if (rate == 0) for (i <- 0 until rays.count)
         assert(pk.hits.prim(i) == slot.prim(i) && java.lang.Float.floatToRawIntBits(pk.hits.t(i)) == java.lang.Float.floatToRawIntBits(slot.t(i)),
           s"ray $i: the packed image's hit differs from slot64's")
-      checkLeafBytes(j, Presets.paper2017.copy(tus = tus, mppl = mppl, primPacked = true))
+      checkLeafBytes(j, Presets.paper2017.copy(tus = tus, mppl = mppl, primPacked = true), rate, seed)
     }
 
   /** The DRAM bytes the MC requested for leaves (all bytes less the node slots) are the model's leafBytes(count)
     * summed over its leaf fetches, and fewer than slot64's 64 B per primitive.
     */
-  private def checkLeafBytes(j: ujson.Value, p: rtaccel.config.PlatformParams): Unit = {
+  private def checkLeafBytes(j: ujson.Value, p: rtaccel.config.PlatformParams, rate: Double = 0, seed: Int = 1): Unit = {
     val b = Cli.build(scene, p, fit = false, stack = Some(64))
     val st = new rtaccel.model.RayStats
-    new rtaccel.model.Traversal(rtaccel.bvh.MemoryImage.pack(b.bvh, scene, b.params)).traceAll(rays, stats = st)
+    val img = rtaccel.bvh.MemoryImage.pack(b.bvh, scene, b.params)
+    // the run's sticky errors (runOne's mode): a ray reads no child of a poisoned node, so it fetches fewer leaves
+    val axi = rtaccel.mc.AxiParams.of(b.params)
+    val faults = MemFaults(MemFaults.threshold(rate), seed, axi.beatBytes, b.params.nodeSlotBytes,
+      rtaccel.host.ImageFile.layout(img, axi).primBaseBytes, b.params.primStrideBytes)
+    new rtaccel.model.Traversal(img, faults).traceAll(rays, stats = st)
     val leafBytes = j("counters")("mem_bytes").num - j("node_requests").num * b.params.nodeSlotBytes
     info(f"primitive bytes per ray: packed ${leafBytes / rays.count}%.1f, slot64 ${st.primTests * 64.0 / rays.count}%.1f")
     assert(leafBytes == st.primBytes.toDouble && leafBytes < st.primTests * 64.0, "leaf bytes differ from the model's leafBytes")

@@ -89,6 +89,8 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val ready = WireDefault(true.B) // false while the arrays are cleared or the static buffer is preloaded
 
   val hit = Wire(Bool()); val fill = Wire(Bool()); val dataLine = Wire(UInt(math.max(1, lineBits).W))
+  // the lookup hit a poisoned line (see `poison` below): it refetches, a miss that fills the same data line
+  val forced = WireDefault(false.B)
   // RESP_ORDER=tagged: a hit is clean when no held ticket still fills its data line; it then waits in the hit
   // queue, not behind the tickets
   val hitQ = if (tagged) Some(Module(new ScanQueue(new Ticket, hw.cacheHitQueue))) else None
@@ -105,7 +107,9 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   /** a decision entering the queues (`eFire`): stage 1's, or stage 2's with PIPELINE */
   val eFire = if (slice == 0) s1Fire else s2Valid && roomAll
   private def entering[T <: Data](x: T): T = if (slice == 0) x else RegEnable(x, s1Fire)
-  val (eHit, eFill, eLine, eReq) = (entering(hit), entering(fill), entering(dataLine), entering(s1))
+  val (eHit, eFill, eLine, eReq) = (entering(hit && !forced), entering(fill || forced), entering(dataLine), entering(s1))
+  /** a lookup that refetched a poisoned line (simulation taps it: the trace model replays these as misses) */
+  val eForced: Bool = entering(forced)
   s1Go := (if (slice == 0) roomAll else !s2Valid || eFire)
   if (slice > 0) when(s1Fire) { s2Valid := true.B }.elsewhen(eFire) { s2Valid := false.B }
   // every ticket older than the entering decision is held or done, so the check sees all the fills ahead of it
@@ -117,11 +121,39 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   when(io.in.fire) { s1 := io.in.bits; s1Valid := true.B }
   val lookLine = Mux(s1Valid && !advance, s1.line, io.in.bits.line)
 
+  /** An errored fill is not kept as a good line (MEM_RETRIES left an error the re-reads met each time, or there
+    * were none): the data stage marks its data line poisoned, and a lookup that hits a poisoned line refetches it, a
+    * miss that fills the same line, whatever the error's kind. The lookups already queued behind the errored fill
+    * read its beats, error bits and all: they asked for the line the fill brought (as requests merged into a miss
+    * would). A clean fill of the line clears the mark. The marks sit beside the tag arrays, one per way, read with
+    * the set; whether a lookup saw a mark depends on when its fill's DRAM answer came, so the simulation logs each
+    * refetch for the trace model (CacheReport).
+    */
+  class PoisonMarks(val sets: Int, val ways: Int) {
+    private val setBits = math.max(1, log2Ceil(sets))
+    private val mem = SyncReadMem(sets, Vec(ways, Bool()), SyncReadMem.ReadFirst)
+    private val wEn = WireDefault(false.B); private val wSet = WireDefault(0.U(setBits.W))
+    private val wWay = WireDefault(0.U(math.max(1, log2Ceil(ways)).W)); private val wBit = WireDefault(false.B)
+    private val clearAll = WireDefault(false.B)
+    mem.write(wSet, VecInit(Seq.fill(ways)(wBit && !clearAll)), VecInit(Seq.tabulate(ways)(w => wEn && (clearAll || wWay === w.U))))
+    def read(setLine: UInt): Vec[Bool] = mem.read(if (sets == 1) 0.U else setLine(setBits - 1, 0))
+    /** the reset sweep (with the tags') */
+    def clear(clearing: Bool, clearSet: UInt): Unit = when(clearing && clearSet < sets.U) {
+      wEn := true.B; clearAll := true.B; wSet := clearSet(setBits - 1, 0)
+    }
+    def mark(en: Bool, set: UInt, way: UInt, bad: Bool): Unit = when(en) { wEn := true.B; wSet := set; wWay := way; wBit := bad }
+  }
+  // one per tag array (bf: one per line), so the data line of (set, way) is set * ways + way after the arrays before
+  val poison: Seq[PoisonMarks] =
+    if (isBf) Seq(new PoisonMarks(cg.lines, 1))
+    else Seq(new PoisonMarks(cg.lines / c.ways, c.ways)) ++ (if (isHybrid) Seq(new PoisonMarks(cg.sideLines / cg.sideWays, cg.sideWays)) else Nil)
+
   if (isBf) {
     // static buffer: lines 0..lines-1 hold nodes 0..lines-1 (the highest, breadth-first ids)
     hit := s1.line < cg.lines.U
     fill := false.B
     dataLine := s1.line(math.max(1, lineBits) - 1, 0)
+    forced := hit && poison.head.read(lookLine)(0)
   } else {
     val tagRuw = if (!g0.p.tagForward) SyncReadMem.Undefined else if (forwardWrites) SyncReadMem.WriteFirst else SyncReadMem.ReadFirst
     val mainPol = Policies.of(if (isHybrid) CachePolicy.Dm else c.policy, c.ways)
@@ -142,8 +174,11 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
     val clearing = clearIdx =/= maxSets.U
     when(clearing) { clearIdx := clearIdx + 1.U }
     ready := !clearing
+    val poisoned = poison.zip(arrays).map { case (pm, a) => pm.read(a.setOf(lookLine)) }
+    for ((pm, a) <- poison.zip(arrays)) pm.clear(clearing, clearIdx)
     if (!isHybrid) {
       hit := ds.head.hit; fill := ds.head.fill; dataLine := mainIdx
+      forced := ds.head.hit && poisoned.head(ds.head.way)
       main.update(s1.line, ds.head, s1Fire, true.B, clearing, clearIdx)
     } else {
       // a line is in at most one array; the DM line is replaced when the level policy allows, else the side
@@ -153,6 +188,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
       hit := dm.hit || side.hit
       fill := !hit && (dm.fill || side.fill)
       dataLine := Mux(dm.hit || (!side.hit && dm.fill), mainIdx, sideIdx)
+      forced := (dm.hit && poisoned(0)(0)) || (side.hit && poisoned(1)(side.way))
       main.update(s1.line, dm, s1Fire, !side.hit, clearing, clearIdx)
       arrays(1).update(s1.line, side, s1Fire, side.hit || (!dm.hit && !dm.fill), clearing, clearIdx)
     }
@@ -256,6 +292,21 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val canTakeMiss = missHead && !readFlight.reduce(_ || _) && (head.silent || outQ.io.enq.ready) && !fillBlocked
   io.memResp.ready := canTakeMiss
   val missBeat = io.memResp.fire
+  // a fill's error bits, gathered over its beats, mark its data line at its last beat (PoisonMarks)
+  val fillErr = RegInit(false.B)
+  when(missBeat && head.fill) { fillErr := !lastBeat && (fillErr || io.memResp.bits.err) }
+  private val lineErr = fillErr || io.memResp.bits.err
+  locally {
+    var base = 0
+    for (pm <- poison) {
+      val wayBits = log2Ceil(pm.ways)
+      val local = head.line -& base.U
+      val inIt = head.line >= base.U && head.line < (base + pm.sets * pm.ways).U
+      pm.mark(missBeat && head.fill && lastBeat && inIt, (local >> wayBits)(math.max(1, log2Ceil(pm.sets)) - 1, 0),
+        if (wayBits == 0) 0.U else local(wayBits - 1, 0), lineErr)
+      base += pm.sets * pm.ways
+    }
+  }
   when(toRamValid(missBeat && head.fill)) { data.write(toRam(addr(head.line, beat)), toRam(Cat(io.memResp.bits.err, io.memResp.bits.data))) }
 
   outQ.io.enq.valid := inflight || (missBeat && !head.silent)
