@@ -36,6 +36,8 @@ object PlatformRun {
     "status_done" -> !j("status")("done").bool,
     "status_read_error" -> (j("status")("read_error").bool != (j("read_errors").num > 0)),
     "status_overflow" -> (j("status")("overflow").bool != (j("overflowed").num > 0)), "read_errors_vs_model" -> (j("read_error_disagreements").num > 0),
+    "step_limit_vs_model" -> (j("step_limit_disagreements").num > 0),
+    "status_step_limit" -> (j("status")("step_limit").bool != (j("step_limit_rays").num > 0)),
     // TLAST on exactly one hit beat, the batch's last (none for an empty batch)
     "hit_tlast" -> (j("hit_tlast")("beats").num != math.min(1, j("rays").num) || j("hit_tlast")("at").num != math.max(0, j("rays").num - 1)),
     // null when there is no cache to compare
@@ -50,10 +52,10 @@ object PlatformRun {
   }
 
   /** The hit stream as the host captured it, by ray id: each record, how often it came, its fault flags. */
-  final case class RtlHits(hits: Hits, seen: Array[Int], overflow: Array[Boolean], readError: Array[Boolean])
+  final case class RtlHits(hits: Hits, seen: Array[Int], overflow: Array[Boolean], readError: Array[Boolean], stepLimit: Array[Boolean])
 
   private def readHits(dut: SimHarness, received: Long, count: Int): RtlHits = {
-    val r = RtlHits(Hits.empty(count), new Array[Int](count), new Array[Boolean](count), new Array[Boolean](count))
+    val r = RtlHits(Hits.empty(count), new Array[Int](count), new Array[Boolean](count), new Array[Boolean](count), new Array[Boolean](count))
     for (k <- 0 until math.min(received, count.toLong).toInt) {
       dut.io.readIdx.poke(k.U)
       val w = dut.io.readData.peek().litValue
@@ -63,14 +65,14 @@ object PlatformRun {
         r.seen(id) += 1
         r.hits.t(id) = java.lang.Float.intBitsToFloat(word(1)); r.hits.prim(id) = word(2)
         r.hits.u(id) = java.lang.Float.intBitsToFloat(word(3)); r.hits.v(id) = java.lang.Float.intBitsToFloat(word(4))
-        r.overflow(id) = (word(5) & 1) != 0; r.readError(id) = (word(5) & 2) != 0
+        r.overflow(id) = (word(5) & 1) != 0; r.readError(id) = (word(5) & 2) != 0; r.stepLimit(id) = (word(5) & 4) != 0
       }
     }
     r
   }
 
   /** RTL against the model, ray by ray: raw bits of every field, and each fault flag against the model's record. */
-  final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int)
+  final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int, stepLimitDisagree: Int)
 
   private def compare(rtl: RtlHits, model: Hits, flags: RayStats): Comparison = {
     def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
@@ -81,7 +83,8 @@ object PlatformRun {
       lost = rtl.seen.count(_ == 0),
       // each flag against the model's own flag: a ray that overflowed and read an error carries both
       overflowDisagree = got.count(i => rtl.overflow(i) != flags.overflowRays(i)),
-      readErrorDisagree = got.count(i => rtl.readError(i) != flags.readErrorRays(i)))
+      readErrorDisagree = got.count(i => rtl.readError(i) != flags.readErrorRays(i)),
+      stepLimitDisagree = got.count(i => rtl.stepLimit(i) != flags.stepLimitRays(i)))
   }
 
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
@@ -186,8 +189,8 @@ object PlatformRun {
       val hits = rtl.hits
       val tHits = System.nanoTime()
       val cmp = compare(rtl, model, stats)
-      import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree}
-      val (rtlOverflow, rtlReadError) = (rtl.overflow, rtl.readError)
+      import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree, stepLimitDisagree}
+      val (rtlOverflow, rtlReadError, rtlStepLimit) = (rtl.overflow, rtl.readError, rtl.stepLimit)
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
       // and against the model's N-TU interleaved order (the fast model's prediction)
       // one log per IU cluster, each the order its own caches saw
@@ -208,10 +211,10 @@ object PlatformRun {
       val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
       // what the host got: a ray is usable when its record came back without a fault flag ("ok" says only that the
       // hardware did what the model says; a run whose every ray read an error is ok, and not healthy)
-      val usable = (0 until rays.count).count(i => rtl.seen(i) > 0 && !rtlOverflow(i) && !rtlReadError(i))
-      val (nOverflow, nReadError) = (rtlOverflow.count(identity), rtlReadError.count(identity))
+      val usable = (0 until rays.count).count(i => rtl.seen(i) > 0 && !rtlOverflow(i) && !rtlReadError(i) && !rtlStepLimit(i))
+      val (nOverflow, nReadError, nStepLimit) = (rtlOverflow.count(identity), rtlReadError.count(identity), rtlStepLimit.count(identity))
       System.err.println(s"[simulate] usable: $usable of ${rays.count} rays ($nReadError read errors, " +
-        s"$nOverflow stack overflows, ${rays.count - rtl.seen.count(_ > 0)} not returned)")
+        s"$nOverflow stack overflows, $nStepLimit step limits, ${rays.count - rtl.seen.count(_ > 0)} not returned)")
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
       val json = ujson.Obj(
@@ -234,8 +237,10 @@ object PlatformRun {
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> nReadError,
         "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,
         "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
+        "max_steps" -> p.stepLimit.toDouble, "step_limit_rays" -> nStepLimit, "model_step_limit_rays" -> stats.stepLimits,
+        "step_limit_disagreements" -> stepLimitDisagree,
         "health" -> ujson.Obj("usable" -> usable, "read_error" -> nReadError, "overflow" -> nOverflow,
-          "error_beats" -> counters("mem_read_errors").toDouble),
+          "step_limit" -> nStepLimit, "error_beats" -> counters("mem_read_errors").toDouble),
         "hit_tlast" -> ujson.Obj("beats" -> tlasts.toDouble, "at" -> tlastAt.toDouble),
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
         "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,
