@@ -23,6 +23,21 @@ object TestScenes {
   }
 
   /** Random rays from points around the soup's cube towards random points inside it. */
+  /** `img` after `flips` silent bit flips (seeded), as memory that corrupts without reporting it would hold it: a
+    * third in child references (the flips that can make a node name itself or an ancestor), a third in any node word,
+    * a third in any primitive word. The same words, the same size.
+    */
+  def flipBits(img: rtaccel.bvh.MemoryImage, seed: Long, flips: Int): rtaccel.bvh.MemoryImage = {
+    val p = img.p; val rnd = new Random(seed)
+    val nodes = img.nodes.clone(); val prims = img.prims.clone()
+    for (_ <- 0 until flips) rnd.nextInt(3) match {
+      case 0 => nodes(rnd.nextInt(img.numNodes) * img.nodeWords + 7 * rnd.nextInt(p.m) + 6) ^= 1 << rnd.nextInt(p.refs.refBits)
+      case 1 => nodes(rnd.nextInt(nodes.length)) ^= 1 << rnd.nextInt(32)
+      case _ => prims(rnd.nextInt(prims.length)) ^= 1 << rnd.nextInt(32)
+    }
+    img.copy(nodes = nodes, prims = prims)
+  }
+
   def rays(seed: Long, n: Int, lo: Float = -2f, hi: Float = 12f): Rays = {
     val r = new Random(seed)
     def p() = lo + r.nextFloat() * (hi - lo)

@@ -98,20 +98,27 @@ object PlatformRun {
       pipelineMhz = None).toString + s" budget ${p.stageBudget}" + p.stageBudget.fold("")(_ => s" dsp ${p.dspShape} ram ${p.delayRamCycles}")).getBytes("UTF-8"))
       .take(5).map(b => f"${b & 0xff}%02x").mkString
 
-  /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
-  def run(b: rtaccel.config.Built, rays: Rays, o: SimOptions): Outcome = {
+  /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised).
+    * `image`: the memory image to load instead of the tree's (a test's corrupted copy); the model then traverses
+    * memory as the platform reads it (ImageFile.asRead), stray references included.
+    */
+  def run(b: rtaccel.config.Built, rays: Rays, o: SimOptions, image: Option[MemoryImage] = None): Outcome = {
     val p = b.params
     CachePath.validate(p)
     val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
-    val img = MemoryImage.pack(b.bvh, b.scene, p)
+    val img = image.getOrElse(MemoryImage.pack(b.bvh, b.scene, p))
+    require(img.p == p, "the image was packed for another configuration")
     val axi = AxiParams.of(p)
     val lay0 = ImageFile.layout(img, axi)
+    val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
+    val wordCap = SimSetup.capacity((imageBytes + axi.beatBytes - 1) / axi.beatBytes, SimSetup.minImageBytes / axi.beatBytes)
+    val modelImg = if (image.isEmpty) img else ImageFile.asRead(img, lay0, axi, wordCap.toLong * axi.beatBytes)
     // the poisoned beats the DRAM model will answer with SLVERR (MEM_ERROR_RATE), known to the model
     val faults = MemFaults(o.errorThreshold, o.seed, axi.beatBytes, p.nodeSlotBytes, lay0.primBaseBytes, p.primStrideBytes)
     val tModel = System.nanoTime()
     val stats = new RayStats
     val rec = new AccessRecorder
-    val model = new Traversal(img, faults).traceAll(rays, if (cached) rec else AccessSink.none, stats)
+    val model = new Traversal(modelImg, faults).traceAll(rays, if (cached) rec else AccessSink.none, stats)
     val accessRows = rec.toArray
     // the RTL logs its access order only when a cache is present; it makes exactly the model's accesses
     val logCap = if (cached) SimSetup.capacity(accessRows.length / 5, SimSetup.minLogEntries) else 0
@@ -121,9 +128,7 @@ object PlatformRun {
     val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
       bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
     // One folder per simulator build: everything that changes the circuit is in its name.
-    val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
     val rayCap = SimSetup.capacity(rays.count, SimSetup.minRays)
-    val wordCap = SimSetup.capacity((imageBytes + axi.beatBytes - 1) / axi.beatBytes, SimSetup.minImageBytes / axi.beatBytes)
     val r = p.refs
     val key = s"tus${p.tus}" + (if (p.ius > 1) s"-ius${p.ius}" else "") + (if (p.memChannels > 1) s"-ch${p.memChannels}.${p.hw.channelInterleaveBytes}" else "") + s"-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
@@ -137,7 +142,9 @@ object PlatformRun {
       (if (p.nodeQuantBits > 0) s"-node${Numerics.nodeFormatName(p.nodeQuantBits)}" else "") +
       s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + // HwLimits: in the digest
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "") +
-      s"-p${paramsDigest(p)}"
+      // MAX_STEPS is only the register's reset value, and the host writes the register before every batch
+      // (HostSession.configure): one simulator serves every limit
+      s"-p${paramsDigest(p.copy(maxSteps = None))}"
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
     val layout = ImageFile.write(img, axi, work.resolve("image.hex"))

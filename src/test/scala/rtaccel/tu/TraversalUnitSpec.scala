@@ -527,23 +527,17 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     assert(g2.accesses(0) == Seq(root, leaf(1)) && g2.records(0).prim == -4 && g2.records(0).stepLimit)
   }
 
-  /** The image as a memory that suffered `flips` silent bit flips (seeded: a third in child references, the flips
-    * that make loops, a third in any node word, a third in any primitive word), laid out so that every reference a
-    * flip can make names words the model and the test's IU both read: node ids over the whole id field, primitive
-    * slots over the whole first field plus a leaf's largest count, zero beyond the packed image as memory would be.
-    * The model traverses this image, not the tree it was packed from.
+  /** The image after `flips` silent bit flips (TestScenes.flipBits), padded so that every reference a flip can make
+    * names words the model and the test's IU both read: node ids over the whole id field, primitive slots over the
+    * whole first field plus a leaf's largest count, zero beyond the packed image. The model traverses this image, not
+    * the tree it was packed from (the platform's test reads memory the same way: host.ImageFile.asRead).
     */
   private def corrupted(img: MemoryImage, seed: Long, flips: Int): MemoryImage = {
-    val p = img.p; val rnd = new Random(seed)
+    val p = img.p
     require(p.refs.nodeIdBits <= 16 && p.refs.primIndexBits <= 16, "a fitted layout: the padded copy names every id")
-    val nodes = java.util.Arrays.copyOf(img.nodes, (1 << p.refs.nodeIdBits) * img.nodeWords)
-    val prims = java.util.Arrays.copyOf(img.prims, ((1 << p.refs.primIndexBits) + p.refs.maxLeafPrims) * img.primWords)
-    for (_ <- 0 until flips) rnd.nextInt(3) match {
-      case 0 => nodes(rnd.nextInt(img.numNodes) * img.nodeWords + 7 * rnd.nextInt(p.m) + 6) ^= 1 << rnd.nextInt(p.refs.refBits)
-      case 1 => nodes(rnd.nextInt(img.nodes.length)) ^= 1 << rnd.nextInt(32)
-      case _ => prims(rnd.nextInt(img.prims.length)) ^= 1 << rnd.nextInt(32)
-    }
-    MemoryImage(p, nodes, prims)
+    val f = TestScenes.flipBits(img, seed, flips)
+    MemoryImage(p, java.util.Arrays.copyOf(f.nodes, (1 << p.refs.nodeIdBits) * img.nodeWords),
+      java.util.Arrays.copyOf(f.prims, ((1 << p.refs.primIndexBits) + p.refs.maxLeafPrims) * img.primWords))
   }
 
   // the fitted soup of the random-soup test above (seed 4, M=4, MPPL=2): the same TU circuit, built once
