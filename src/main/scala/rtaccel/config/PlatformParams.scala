@@ -258,7 +258,7 @@ final case class PlatformParams(
     * from the root (treeLevels nodes and the restart's own) once per finished subtree, hence the factor treeLevels + 2.
     * The counts are bounded by what the references can name and the memory hold: node ids of nodeIdBits, leaves by
     * their first field of primIndexBits (each with a primitive slot, or a packed row, of its own), each within the
-    * axiAddrBits address space. CONFIG=fit sizes the fields to the scene (2^bits < 2 x the count), so the default
+    * axiAddrBits address space. CONFIG=fit sizes the fields to the scene (2^bits <= 2 x the count), so the default
     * is 1-2 x nodes + primitives, itself at least nodes + leaves: a loop through a corrupted image ends after about
     * that many fetches, and no correct ray is ever flagged. Capped at the register's largest value, which only a
     * short stack over a tree larger than the address space could need.

@@ -355,13 +355,14 @@ class PlatformSpec extends AnyFunSuite {
 
   // a memory image with silent bit flips (seeded) on the whole platform, at the default step limit of a fitted circuit
   // (its own build: make regress only; make test checks the same flips at the TU, TraversalUnitSpec)
-  if (full) test("random silent bit flips in the memory image: the platform never hangs, every ray returns once, RTL == model with every flag") {
+  if (full) test("a loop and random silent bit flips in the memory image: the platform never hangs, every ray returns once, RTL == model with every flag") {
     val p0 = Presets.paper2017.copy(tus = 4, m = 4, mppl = 4, nodeCache = CacheParams())
     val b = Cli.build(scene, p0, fit = true)
     val clean = rtaccel.bvh.MemoryImage.pack(b.bvh, b.scene, b.params)
     var limited = 0.0
     for (run <- 0 until 8) {
-      val img = TestScenes.flipBits(clean, 300L + run, 60 + 20 * run)
+      // a loop for certain, and the random flips around it
+      val img = TestScenes.flipBits(TestScenes.withLoop(clean, 300L + run), 300L + run, 60 + 20 * run)
       val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(s"soup-flips-$run", build = Some(rtaccel.sim.VerilatorBuild.quick),
         work = "build/sim-test/PlatformSpec"), image = Some(img))
       val j = o.json
