@@ -74,11 +74,12 @@ class TraversalUnit(p: PlatformParams) extends Module {
   val overflow = Reg(Bool())
   val readError = Reg(Bool())
   val stepLimit = Reg(Bool())
-  // fetches the ray may still make (counted down, so the limit is compared with zero, not with a register
-  // across the chip) and whether it has a limit at all
+  // fetches the ray may still make, counted down from MAX_STEPS as the ray starts (so the register across the chip
+  // is read once per ray), whether it has a limit at all, and whether it has made them all: a register set as the
+  // last allowed request leaves, so the request's valid waits on no compare
   val stepsLeft = Reg(UInt(p.hw.stepBits.W))
   val limited = Reg(Bool())
-  private val outOfSteps = limited && stepsLeft === 0.U
+  val outOfSteps = Reg(Bool())
   class Entry extends Bundle { val cref = UInt(TraversalUnit.refBits.W); val t = UInt(TraversalUnit.distBits.W) }
   private val short = p.shortStack > 0
   // with PIPELINE the full stack's top entry is a register (FullStack): a pop's compare does not follow a RAM read
@@ -93,7 +94,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.busy := state =/= S.idle
   when(io.ray.fire) {
     r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B; readError := false.B
-    stepLimit := false.B; stepsLeft := io.maxSteps; limited := io.maxSteps =/= 0.U
+    stepLimit := false.B; stepsLeft := io.maxSteps; limited := io.maxSteps =/= 0.U; outOfSteps := false.B
     best.id := io.ray.bits.id; best.t := inf; best.prim := "hffffffff".U; best.u := 0.U; best.v := 0.U
     stack.foreach(_.clear()); ss.foreach(_.start())
     state := S.issue
@@ -105,7 +106,10 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.req.bits.cref := cur
   io.req.bits.tmax := tmax
   io.req.bits.ray.foreach(_ := r.ray) // RAY_STORE=1: the IU's ray store has it, and r.ray is never read
-  when(io.req.fire) { state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox); stepsLeft := stepsLeft - 1.U }
+  when(io.req.fire) {
+    state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox)
+    stepsLeft := stepsLeft - 1.U; outOfSteps := limited && stepsLeft === 1.U
+  }
 
   // Node: the hit children in the order of their ranks (the box pipe's: nearer first, an equal one in an earlier
   // slot first).

@@ -553,7 +553,7 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     val nodes = clean.nodes.clone()
     nodes(n * clean.nodeWords + 7 * j + 6) = codec.node(n, codec.level(clean.childRef(n, j)))
     val img = clean.copy(nodes = nodes)
-    val rays = soupRays(40, 300); val id = ids(300, 40)
+    val rays = soupRays(40, 200); val id = ids(200, 40)
     val want = model(img, MemFaults.none, rays, id)
     val got = rtl(p, img, rays, id, 40, index = 3)
     compare("self loop at the default limit", 40, got, want, rays)
@@ -569,9 +569,9 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
       assert(want.records(i) == before.records(i) || want.records(i).prim == Hits.Overflow, s"ray $i left the loop with another record")
   }
 
-  // make test: two corrupted images (one with memory read errors too), about a second each; make regress: 60, some
+  // make test: one corrupted image (loops, overflows and memory read errors together), 3 s; make regress: 60, some
   // 6,000 flips in all
-  for (run <- if (rtaccel.Regress.full) 0 until 60 else Seq(2, 6))
+  for (run <- if (rtaccel.Regress.full) 0 until 60 else Seq(2))
     test(s"step limit, random silent bit flips in the image (seeded, run $run): every ray ends once, fetches and records (flags included) equal the model's") {
       val seed = 100L + run
       val clean = fittedSoup
