@@ -80,6 +80,9 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private[this] var boxTests = 0L; private[this] var maxStack = 0
   private[this] var primBytes = 0L // DRAM bytes of the leaves fetched (PlatformParams.leafBytes)
   // the closest hit found so far in the current ray's leaves, and whether a primitive read failed
+  // (whether there is one is a flag of its own: the id is the record's word as memory holds it, and a corrupted image
+  // may hold a negative one, which the TU returns as it reads it)
+  private[this] var hasHit = false
   private[this] var hitPrim = -1; private[this] var hitU = 0f; private[this] var hitV = 0f; private[this] var primError = false
   // TRI_TEST=watertight: the sheared-edge test (null: Möller–Trumbore)
   private[this] val watertight = if (p.triTest == rtaccel.config.TriTest.Watertight) new RayTriangleWatertight else null
@@ -109,7 +112,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     r.set(rays.data, i); regular = nanFreeBoxes && r.regular; ordered = regular && orderedBoxes
     nearX = if (r.ix > 0f) 0 else 3; nearY = if (r.iy > 0f) 0 else 3; nearZ = if (r.iz > 0f) 0 else 3
     nodeFetches = 0L; leafFetches = 0L; primTests = 0L; boxTests = 0L; maxStack = 0; primBytes = 0L
-    hitPrim = -1; hitU = 0f; hitV = 0f; primError = false
+    hasHit = false; hitPrim = -1; hitU = 0f; hitV = 0f; primError = false
   }
 
   private def traceShort(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
@@ -217,7 +220,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
       out.t(i) = Float.PositiveInfinity; out.u(i) = 0f; out.v(i) = 0f
       out.prim(i) = if (readError) Hits.ReadError else if (limited) Hits.StepLimit else Hits.Overflow
     }
-    else if (hitPrim >= 0) { out.t(i) = tmax; out.prim(i) = hitPrim; out.u(i) = hitU; out.v(i) = hitV }
+    else if (hasHit) { out.t(i) = tmax; out.prim(i) = hitPrim; out.u(i) = hitU; out.v(i) = hitV }
   }
 
   /** Tests the primitives of leaf `ref` in slot order against [tmin, tmax); a hit closer than tmax becomes
@@ -238,7 +241,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
             f(prims(w + 4)), f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)
           else watertight.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)), f(prims(w + 4)),
             f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)) {
-        tmax = tri.t; hitPrim = prims(w + 9); hitU = tri.u; hitV = tri.v
+        tmax = tri.t; hasHit = true; hitPrim = prims(w + 9); hitU = tri.u; hitV = tri.v
       }
       k += 1
     }
