@@ -570,12 +570,13 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   }
 
   // make test: one corrupted image (loops, overflows and memory read errors together), 3 s; make regress: 60, some
-  // 6,000 flips in all
+  // 6,000 flips in all, half of them over a loop made on purpose
   for (run <- if (rtaccel.Regress.full) 0 until 60 else Seq(2))
     test(s"step limit, random silent bit flips in the image (seeded, run $run): every ray ends once, fetches and records (flags included) equal the model's") {
       val seed = 100L + run
       val clean = fittedSoup
-      val img = corrupted(clean, seed, flips = 60 + 30 * (run % 4))
+      // odd runs: a loop for certain (a reference made to name its node or an ancestor) under the random flips
+      val img = corrupted(if (run % 2 == 1) TestScenes.withLoop(clean, seed) else clean, seed, flips = 60 + 30 * (run % 4))
       val faults = if (run % 3 != 2) MemFaults.none else {
         val primBase = 4096L * ((img.numNodes.toLong * img.p.nodeStrideBytes + 4095) / 4096)
         MemFaults(MemFaults.threshold(0.003), seed.toInt, 32, img.p.nodeStrideBytes, primBase, 64)
