@@ -29,7 +29,8 @@ final class RayStats {
   * t = +inf, u = v = 0), never a plausible wrong hit.
   * Step limit (docs/architecture.md, "Step limit"): a step is one fetch, node or leaf, counted as the TU counts its
   * requests; a ray that has made params.stepLimit fetches (0: no limit) and needs another stops there, unfetched,
-  * and its record is `Hits.StepLimit` (prim -4): a loop through a corrupted image ends.
+  * and its record is `Hits.StepLimit` (prim -4): a loop through a corrupted image ends. With the short stack a node
+  * deeper than the trail's treeLevels levels ends the ray the same way.
   */
 final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   // The hot loop reads the image's word arrays directly and keeps its state in private[this] fields and
@@ -130,7 +131,9 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     while (running) {
       if (curLevel + 1 >= trail.length) trail = java.util.Arrays.copyOf(trail, trail.length * 2)
       var descended = false
-      if (outOfSteps) { limited = true; running = false; descended = true } // ends here, unfetched
+      // ends here, unfetched: out of steps, or a node below the trail's treeLevels levels (no tree that fits the trail
+      // has one: only a loop through a corrupted image makes it; the TU's trail could not track it)
+      if (outOfSteps || (curLevel >= p.treeLevels && !codec.isPrim(cur))) { limited = true; running = false; descended = true }
       else if (!codec.isPrim(cur)) {
         val id = codec.nodeId(cur)
         sink.node(i, id, curLevel); nodeFetches += 1

@@ -38,7 +38,8 @@ class TuResult extends Bundle {
   * after a drop the TU restarts at the root; same fetches in the same order as the model.
   * Step limit: each request to the IU (a node or a leaf) is a step; a ray takes `maxSteps` from the MAX_STEPS register
   * when it starts (0: no limit), and when it has made that many and needs another it ends without it, flagged
-  * `stepLimit` (prim -4): a loop through a corrupted image cannot hold the TU (model.Traversal counts alike).
+  * `stepLimit` (prim -4): a loop through a corrupted image cannot hold the TU (model.Traversal counts alike). With
+  * the short stack a node deeper than the trail's levels ends the ray the same way.
   */
 class TraversalUnit(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
@@ -100,8 +101,11 @@ class TraversalUnit(p: PlatformParams) extends Module {
     state := S.issue
   }
 
-  io.req.valid := state === S.issue && !outOfSteps
-  when(state === S.issue && outOfSteps) { stepLimit := true.B; state := S.done } // the fetch it needs is not made
+  // with the short stack, a node below the trail's treeLevels levels ends the ray alike: no tree that fits the trail
+  // (Fit.checkTrail) has one, only a loop through a corrupted image makes it, and the trail could not track it
+  private val tooDeep = ss.fold(false.B)(s => !cur(p.refs.refBits - 1) && s.level >= p.treeLevels.U)
+  io.req.valid := state === S.issue && !outOfSteps && !tooDeep
+  when(state === S.issue && (outOfSteps || tooDeep)) { stepLimit := true.B; state := S.done } // the fetch is not made
   io.req.bits.tu := index
   io.req.bits.cref := cur
   io.req.bits.tmax := tmax

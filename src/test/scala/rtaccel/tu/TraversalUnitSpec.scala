@@ -596,4 +596,24 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
         (x.t == fbits(Inf) && x.prim == (if (x.readError) Hits.ReadError else if (x.stepLimit) Hits.StepLimit else Hits.Overflow))))
       if (!rtaccel.Regress.full) assert(r.exists(_.stepLimit), "make test's seeds make a loop some rays enter")
     }
+
+  // the short stack with restart over corrupted images: make test on the short-stack test's circuit (ring 1), one image;
+  // make regress 10 more there and 20 with a ring of 2 on the fitted soup of the random-flip test
+  private def shortSoup = { val i = soupImage(7, 300, PlatformParams(tus = 4, m = 4, mppl = 4), fit = true); i.copy(p = i.p.copy(shortStack = 1)) }
+  for ((ring, images) <- Seq(1 -> (if (rtaccel.Regress.full) 11 else 1)) ++ (if (rtaccel.Regress.full) Seq(2 -> 20) else Nil))
+    test(s"step limit with SHORT_STACK=$ring, a loop and random silent bit flips ($images seeded image(s)): fetches and records (flags included) equal the model's") {
+      val clean = if (ring == 1) shortSoup else { val i = fittedSoup; i.copy(p = i.p.copy(shortStack = ring)) }
+      var limited = 0
+      for (run <- 0 until images) {
+        val seed = 500L + run
+        val img = corrupted(if (run % 2 == 0) TestScenes.withLoop(clean, seed) else clean, seed, flips = 60 + 30 * (run % 4))
+        val rays = soupRays(seed, 150); val id = ids(150, seed)
+        val want = model(img, MemFaults.none, rays, id)
+        val got = rtl(img.p, img, rays, id, seed, index = run % 4)
+        compare(s"ring $ring flips run $run", seed, got, want, rays)
+        limited += want.records.count(_.stepLimit)
+      }
+      info(s"$limited rays ended at the step limit (${clean.p.stepLimit} fetches, or a node below the trail's ${clean.p.treeLevels} levels)")
+      assert(limited > 0)
+    }
 }
