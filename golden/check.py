@@ -3,8 +3,8 @@
 Compares a model's hits with the golden (Embree) hits of the same rays and classifies every disagreement.
 A short summary goes to stderr; the LAST stdout line is one JSON object:
   {"rays", "agree", "classified": {"tie", "edge", "grazing", "degenerate"}, "unexplained", "max_rel_t_err", ...,
-   "faults": {"read_error", "overflow"}}
-A model ray with prim -2 (memory read error) or -3 (stack overflow) never agrees: it is counted in "faults" and,
+   "faults": {"read_error", "overflow", "step_limit"}}
+A model ray with prim -2 (memory read error), -3 (stack overflow) or -4 (step limit) never agrees: it is counted in "faults" and,
 having no result, in "unexplained".
 The rules, their order and every threshold are documented in docs/check.md; the constants below are those.
 """
@@ -16,7 +16,7 @@ import numpy as np
 
 from scenes.cli import EXIT_CHECK_FAILED as CHECK_FAILED, ArgParser, run
 
-from .io import (FAULT_CODES, PRIM_OVERFLOW, PRIM_READ_ERROR, GoldenError, check_hits, check_rays, check_tris,
+from .io import (FAULT_CODES, PRIM_OVERFLOW, PRIM_READ_ERROR, PRIM_STEP_LIMIT, GoldenError, check_hits, check_rays, check_tris,
                  load_hits, load_rays, load_tris)
 from .trace import build_scene, occluded
 
@@ -28,7 +28,7 @@ SCALE_FLOOR = 1e-3      # S >= SCALE_FLOOR * scene extent
 GRAZE_COS = 1e-3        # grazing: |cos(ray, triangle normal)| < GRAZE_COS
 TIE_REL = 1e-4          # tie: t tolerance = TIE_REL * max(|t_a|, |t_b|) + POS_TOL * S / |d|
 CLASSES = ("tie", "edge", "grazing", "degenerate")
-FAULT_LABELS = {PRIM_READ_ERROR: "read error", PRIM_OVERFLOW: "stack overflow"}
+FAULT_LABELS = {PRIM_READ_ERROR: "read error", PRIM_OVERFLOW: "stack overflow", PRIM_STEP_LIMIT: "step limit"}
 
 
 def _norm(x):
@@ -232,7 +232,7 @@ def _compare(tris, rays, golden_hits, model_hits):
 
 def ray_classes(tris, rays, golden_hits, model_hits) -> np.ndarray:
     """The class classify() counts each ray in, one string per ray: "agree", one of CLASSES, "unexplained", or
-    a FAULT_CODES name ("read_error", "overflow") for a model fault."""
+    a FAULT_CODES name ("read_error", "overflow", "step_limit") for a model fault."""
     c = _compare(tris, rays, golden_hits, model_hits)
     out = np.full(c["n"], "agree", dtype=object)
     D, cls = c["D"], c["cls"].copy()
@@ -289,7 +289,7 @@ def summary_text(res: dict) -> str:
     lines = [f"rays {res['rays']}: agree {res['agree']}, disagree {res['disagree']} "
              f"(tie {c['tie']}, edge {c['edge']}, grazing {c['grazing']}, degenerate {c['degenerate']}), "
              f"unexplained {res['unexplained']} (of which model faults: read error {f['read_error']}, "
-             f"stack overflow {f['overflow']}); max rel t err (same prim) {res['max_rel_t_err']:.3g}"]
+             f"stack overflow {f['overflow']}, step limit {f['step_limit']}); max rel t err (same prim) {res['max_rel_t_err']:.3g}"]
     for u in res["unexplained_rays"]:
         fault = FAULT_LABELS.get(u["model"]["prim"])
         lines.append(f"  unexplained ray {u['ray']}{f' (model fault: {fault})' if fault else ''}: "

@@ -20,17 +20,17 @@ import numpy as np
 from scenes.cli import ArgParser, atomic_file, run
 
 from .check import ray_classes
-from .io import FAULT_CODES, PRIM_OVERFLOW, PRIM_READ_ERROR, GoldenError, load_hits, load_rays, load_tris
+from .io import FAULT_CODES, PRIM_OVERFLOW, PRIM_READ_ERROR, PRIM_STEP_LIMIT, GoldenError, load_hits, load_rays, load_tris
 
 LIGHT = np.array([0.4, 0.8, 0.45]) / np.linalg.norm([0.4, 0.8, 0.45])
 AMBIENT = 0.12  # keeps surfaces edge-on to the light distinguishable from misses
-FAULT_RGB = {PRIM_READ_ERROR: (1.0, 0.0, 1.0), PRIM_OVERFLOW: (1.0, 0.55, 0.0)}
+FAULT_RGB = {PRIM_READ_ERROR: (1.0, 0.0, 1.0), PRIM_OVERFLOW: (1.0, 0.55, 0.0), PRIM_STEP_LIMIT: (0.55, 0.35, 0.1)}
 # Classes in legend order; faults keep their image.png colours so both pictures read alike.
 DIFF_RGB = {"agree": (0.2, 0.2, 0.2), "tie": (0.3, 0.55, 1.0), "edge": (0.2, 0.85, 0.85),
             "grazing": (0.3, 0.8, 0.3), "degenerate": (0.95, 0.9, 0.2), "unexplained": (0.9, 0.1, 0.1),
             **{name: FAULT_RGB[code] for name, code in FAULT_CODES.items()}}
 
-LABELS = {"read_error": "read error (prim -2)", "overflow": "stack overflow (prim -3)"}
+LABELS = {"read_error": "read error (prim -2)", "overflow": "stack overflow (prim -3)", "step_limit": "step limit (prim -4)"}
 
 
 def camera_frame(meta, n_rays, where):

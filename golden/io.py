@@ -8,12 +8,14 @@ from scenes.errors import UserError
 
 RAY_COLUMNS = ("ox", "oy", "oz", "dx", "dy", "dz", "tmin", "tmax")
 HIT_DTYPE = np.dtype([("t", "<f4"), ("prim", "<i4"), ("u", "<f4"), ("v", "<f4")])
-# Negative prim codes of a hit record (t = +inf for all three). The faults come from the model/RTL only: the ray
+# Negative prim codes of a hit record (t = +inf for all of them). The faults come from the model/RTL only: the ray
 # has no result, so it must neither look like a miss nor be dropped.
 PRIM_MISS = -1
 PRIM_READ_ERROR = -2   # a memory read of the ray's traversal failed
 PRIM_OVERFLOW = -3     # the ray's traversal stack overflowed
-FAULT_CODES = {"read_error": PRIM_READ_ERROR, "overflow": PRIM_OVERFLOW}
+PRIM_STEP_LIMIT = -4   # the ray needed more fetches than MAX_STEPS (a loop through a corrupted image) and ended
+FAULT_CODES = {"read_error": PRIM_READ_ERROR, "overflow": PRIM_OVERFLOW, "step_limit": PRIM_STEP_LIMIT}
+PRIM_LOWEST = min(FAULT_CODES.values())
 
 
 class GoldenError(UserError):
@@ -60,7 +62,7 @@ def load_rays(path: str) -> np.ndarray:
 
 
 def check_hits(hits, n=None, where="hits"):
-    """Validate a hits array: structured dtype HIT_DTYPE, 1-D, prim >= PRIM_OVERFLOW, optional ray count n."""
+    """Validate a hits array: structured dtype HIT_DTYPE, 1-D, prim >= PRIM_LOWEST, optional ray count n."""
     if not isinstance(hits, np.ndarray) or hits.dtype != HIT_DTYPE:
         raise GoldenError(f"{where}: dtype must be {HIT_DTYPE.descr} (t,prim,u,v), got "
                           f"{getattr(hits, 'dtype', type(hits))}; save hits with that structured dtype")
@@ -69,10 +71,10 @@ def check_hits(hits, n=None, where="hits"):
     if n is not None and len(hits) != n:
         raise GoldenError(f"{where}: has {len(hits)} records but there are {n} rays; hits must follow the ray "
                           f"order one to one")
-    if len(hits) and hits["prim"].min() < PRIM_OVERFLOW:
-        i = int(np.nonzero(hits["prim"] < PRIM_OVERFLOW)[0][0])
-        raise GoldenError(f"{where}: prim {int(hits['prim'][i])} below {PRIM_OVERFLOW} (ray {i}); use -1 for a miss, "
-                          f"-2 for a memory read error, -3 for a stack overflow")
+    if len(hits) and hits["prim"].min() < PRIM_LOWEST:
+        i = int(np.nonzero(hits["prim"] < PRIM_LOWEST)[0][0])
+        raise GoldenError(f"{where}: prim {int(hits['prim'][i])} below {PRIM_LOWEST} (ray {i}); use -1 for a miss, "
+                          f"-2 for a memory read error, -3 for a stack overflow, -4 for the step limit")
     return hits
 
 

@@ -33,7 +33,7 @@ def main(run_dir: str) -> None:
     faults = check.get("faults") or {}
     if any(faults.values()):  # already counted in unexplained
         print(f"            model faults: read error {faults.get('read_error', 0)}, "
-              f"stack overflow {faults.get('overflow', 0)}")
+              f"stack overflow {faults.get('overflow', 0)}, step limit {faults.get('step_limit', 0)}")
     print("bytes/ray   MPPL: node / prim / total")
     for mppl, v in sorted(bpr.items(), key=lambda kv: int(kv[0])):
         print(f"            {int(mppl):>4}: {v['node']:9.1f} / {v['prim']:8.1f} / {v['total']:9.1f}")

@@ -37,7 +37,7 @@ def summary(d, sim=None):
 def test_without_simulation(run_dir):
     r, out = summary(run_dir)
     assert r.returncode == 0, r.stderr
-    assert "            model faults: read error 1, stack overflow 1" in out
+    assert "            model faults: read error 1, stack overflow 1, step limit 0" in out
     assert not [l for l in out if l.startswith("image ") or "check:" in l]
     j = json.loads(out[-1])
     assert j["unexplained"] == 2 and "rtl_ok" not in j and j["node_bytes_per_ray"] == 500.0

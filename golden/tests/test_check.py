@@ -82,7 +82,7 @@ def test_ray_classes_match_classify():
 
 
 # Rays that would agree (0), be an edge case (6), degenerate (5) or a plain miss (12) but the model faulted on.
-FAULTED = ((0, -2), (6, -3), (5, -2), (12, -3), (2, -2))
+FAULTED = ((0, -2), (6, -3), (5, -2), (12, -3), (2, -4))
 
 
 def _faulted():
@@ -96,7 +96,7 @@ def test_faults_never_agree_and_count_as_unexplained():
     rays, g, m = _faulted()
     res = classify(TRIS, rays, g, m)
     base = classify(TRIS, *_arrays())
-    assert res["faults"] == {"read_error": 3, "overflow": 2}
+    assert res["faults"] == {"read_error": 2, "overflow": 2, "step_limit": 1}
     faulted = {i for i, _ in FAULTED}
     expect = [("fault" if i in faulted else c[4]) for i, c in enumerate(CASES)]
     assert res["agree"] == expect.count("agree") == base["agree"] - 2
@@ -107,22 +107,23 @@ def test_faults_never_agree_and_count_as_unexplained():
     assert [u["ray"] for u in res["unexplained_rays"]] == want
     assert list(res) == list(base) == ["rays", "agree", "classified", "unexplained", "max_rel_t_err", "disagree",
                                        "nonfinite_t_same_prim", "examples", "unexplained_rays", "faults"]
-    assert base["faults"] == {"read_error": 0, "overflow": 0}
+    assert base["faults"] == {"read_error": 0, "overflow": 0, "step_limit": 0}
     per = ray_classes(TRIS, rays, g, m)
-    assert [per[i] for i, _ in FAULTED] == ["read_error", "overflow", "read_error", "overflow", "read_error"]
+    assert [per[i] for i, _ in FAULTED] == ["read_error", "overflow", "read_error", "overflow", "step_limit"]
     text = summary_text(res)
-    assert "model faults: read error 3, stack overflow 2" in text.splitlines()[0]
+    assert "model faults: read error 2, stack overflow 2, step limit 1" in text.splitlines()[0]
     assert "unexplained ray 6 (model fault: stack overflow)" in text
+    assert "unexplained ray 2 (model fault: step limit)" in text
     assert "unexplained ray 13: " in text  # a wrong prim is not called a fault
 
 
 def test_hits_fault_codes_accepted_below_refused():
     h = miss_hits(4)
-    h["prim"] = [-1, -2, -3, 0]
+    h["prim"] = [-1, -2, -3, -4]
     assert check_hits(h) is h
-    h["prim"][2] = -4
-    with pytest.raises(GoldenError, match=r"prim -4 below -3 \(ray 2\); use -1 for a miss, -2 for a memory read "
-                                          r"error, -3 for a stack overflow"):
+    h["prim"][2] = -5
+    with pytest.raises(GoldenError, match=r"prim -5 below -4 \(ray 2\); use -1 for a miss, -2 for a memory read "
+                                          r"error, -3 for a stack overflow, -4 for the step limit"):
         check_hits(h)
 
 
@@ -192,5 +193,5 @@ def test_cli_reports_faults(tmp_path):
                 "--hits", str(tmp_path / "model.npy"))
     assert r.returncode == 3, r.stderr
     out = json.loads(r.stdout.strip().splitlines()[-1])
-    assert out["faults"] == {"read_error": 1, "overflow": 0} and out["unexplained"] == 1
+    assert out["faults"] == {"read_error": 1, "overflow": 0, "step_limit": 0} and out["unexplained"] == 1
     assert out["agree"] == len(rays) - 1 and "model fault: read error" in r.stderr

@@ -73,11 +73,11 @@ def test_perturbed_hits_mark_exactly_those_pixels(cornell, tmp_path):
     w, h = meta["params"]["width"], meta["params"]["height"]
     hits = g.copy()
     hit = np.nonzero(g["prim"][:w * h] >= 0)[0]
-    read_err, overflow, missed = hit[:5], hit[40:43], hit[100:104]
+    read_err, overflow, missed, limited = hit[:5], hit[40:43], hit[100:104], hit[60:62]
     # a triangle far from every hit point and no camera ray's own prim: a plain wrong answer
     far = int(np.setdiff1d(np.arange(len(np.load(tris))), g["prim"][:w * h])[0])
     wrong = hit[150:152]
-    for idx, prim in ((read_err, -2), (overflow, -3), (missed, -1), (wrong, far)):
+    for idx, prim in ((read_err, -2), (overflow, -3), (missed, -1), (limited, -4), (wrong, far)):
         hits["prim"][idx] = prim
         hits["t"][idx] = np.inf if prim < 0 else 1e3
     hits["prim"][w * h:] = -2  # bounce rays are not pixels: their faults must not appear
@@ -85,9 +85,9 @@ def test_perturbed_hits_mark_exactly_those_pixels(cornell, tmp_path):
     np.save(tmp_path / "hits.npy", hits)
     r, j = draw(tris, golden, tmp_path / "hits.npy", tmp_path / "pics")
     assert r.returncode == 0, r.stderr
-    changed = np.concatenate([read_err, overflow, missed, wrong])
+    changed = np.concatenate([read_err, overflow, missed, limited, wrong])
     assert j["differing_pixels"] == len(changed)
-    assert j["classes"]["read_error"] == 5 and j["classes"]["overflow"] == 3
+    assert j["classes"]["read_error"] == 5 and j["classes"]["overflow"] == 3 and j["classes"]["step_limit"] == 2
     assert j["classes"]["agree"] == w * h - len(changed)
 
     img, diff, cls = image.render(np.load(tris), np.load(golden / "rays.npy"), g, hits, w, h)
@@ -95,7 +95,7 @@ def test_perturbed_hits_mark_exactly_those_pixels(cornell, tmp_path):
     assert all(cls.ravel()[read_err] == "read_error") and all(cls.ravel()[overflow] == "overflow")
     flat_img, flat_diff = img.reshape(-1, 3), diff.reshape(-1, 3)
     assert np.all(flat_img[read_err] == image.FAULT_RGB[-2]) and np.all(flat_img[overflow] == image.FAULT_RGB[-3])
-    assert np.all(flat_img[missed] == 0)
+    assert np.all(flat_img[missed] == 0) and np.all(flat_img[limited] == image.FAULT_RGB[-4])
     keep = np.setdiff1d(np.arange(w * h), changed)
     assert np.all(flat_diff[keep] == image.DIFF_RGB["agree"])
     assert not np.any(np.all(flat_diff[changed] == image.DIFF_RGB["agree"], axis=1))
@@ -146,7 +146,7 @@ def _short_hits(g):
 
 def _low_prim(g):
     h = np.load(g / "hits.npy")
-    h["prim"][3] = -4
+    h["prim"][3] = -5
     np.save(g.parent / "hits.npy", h)
 
 
@@ -174,7 +174,7 @@ def _string_size(g):
     (_string_size, "params.width/height must be positive integers"),
     (_drop_size, "has no params.width/height: its rays are not from a camera"),
     (_short_hits, "records but there are"),
-    (_low_prim, "prim -4 below -3"),
+    (_low_prim, "prim -5 below -4"),
     (_no_meta, "meta.json does not exist"),
     (_bad_json, "meta.json is not JSON"),
     (_inconsistent, "camera rays, but rays.npy has"),

@@ -23,6 +23,38 @@ object TestScenes {
   }
 
   /** Random rays from points around the soup's cube towards random points inside it. */
+  /** `img` after `flips` silent bit flips (seeded), as memory that corrupts without reporting it would hold it: a
+    * third in child references (the flips that can make a node name itself or an ancestor), a third in any node word,
+    * a third in any primitive word. The same words, the same size.
+    */
+  def flipBits(img: rtaccel.bvh.MemoryImage, seed: Long, flips: Int): rtaccel.bvh.MemoryImage = {
+    val p = img.p; val rnd = new Random(seed)
+    val nodes = img.nodes.clone(); val prims = img.prims.clone()
+    for (_ <- 0 until flips) rnd.nextInt(3) match {
+      case 0 => nodes(rnd.nextInt(img.numNodes) * img.nodeWords + 7 * rnd.nextInt(p.m) + 6) ^= 1 << rnd.nextInt(p.refs.refBits)
+      case 1 => nodes(rnd.nextInt(nodes.length)) ^= 1 << rnd.nextInt(32)
+      case _ => prims(rnd.nextInt(prims.length)) ^= 1 << rnd.nextInt(32)
+    }
+    img.copy(nodes = nodes, prims = prims)
+  }
+
+  /** `img` with one corrupted reference that makes a loop (seeded): a random inner child now names its own node or
+    * one of that node's ancestors (not the root, which a reference without a level field cannot name: ref 0 is an
+    * empty slot). Full nodes only.
+    */
+  def withLoop(img: rtaccel.bvh.MemoryImage, seed: Long): rtaccel.bvh.MemoryImage = {
+    val p = img.p; val rnd = new Random(seed); val codec = new rtaccel.bvh.RefCodec(p.refs)
+    require(p.nodeQuantBits == 0, "full nodes: a child reference is word 7j + 6")
+    def ref(n: Int, j: Int) = img.nodes(n * img.nodeWords + 7 * j + 6)
+    val inner = for (n <- 0 until img.numNodes; j <- 0 until p.m if ref(n, j) != 0 && !codec.isPrim(ref(n, j))) yield (n, j)
+    val parent = inner.map { case (n, j) => codec.nodeId(ref(n, j)) -> n }.toMap
+    val (n, j) = inner.filter(_._1 >= 1)(rnd.nextInt(inner.count(_._1 >= 1)))
+    val up = Iterator.iterate(n)(parent).takeWhile(_ >= 1).toSeq // n and its ancestors below the root
+    val nodes = img.nodes.clone()
+    nodes(n * img.nodeWords + 7 * j + 6) = codec.node(up(rnd.nextInt(up.length)), codec.level(ref(n, j)))
+    img.copy(nodes = nodes)
+  }
+
   def rays(seed: Long, n: Int, lo: Float = -2f, hi: Float = 12f): Rays = {
     val r = new Random(seed)
     def p() = lo + r.nextFloat() * (hi - lo)

@@ -61,6 +61,7 @@ object Cli {
       nodeAccessBytesOverride = a.int("node-bytes", base.nodeAccessBytesOverride),
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),
+      maxSteps = a.opt("max-steps").map(_ => a.int("max-steps", 0)).orElse(base.maxSteps),
       // m<M>: M fraction bits, the exponent fitted to the scene in build()
       boxFormat = a.opt("box-format").map(v => BoxRange.fitRequest(v).fold(rtaccel.fp.FpFormat.parse(v))(rtaccel.fp.FpFormat(8, _)))
         .getOrElse(base.boxFormat),

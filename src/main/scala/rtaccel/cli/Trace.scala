@@ -35,6 +35,7 @@ object Trace {
       "node_bytes_per_ray" -> st.nodeFetches * p.nodeAccessBytes / n,
       "prim_bytes_per_ray" -> st.primBytes / n,
       "max_stack" -> st.maxStack, "stack_overflow_rays" -> st.overflows, "overflowed" -> st.overflows,
+      "max_steps" -> p.stepLimit.toDouble, "step_limit_rays" -> st.stepLimits,
       "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "restarts" -> st.restarts.toDouble,
       "build_s" -> b.buildSeconds, "trace_s" -> secs, "rays_per_s" -> rays.count / math.max(secs, 1e-9))
     exhaustive.foreach { e =>

@@ -132,6 +132,9 @@ object Knobs {
     Knob("MEM_RETRIES", "mem-retries", "re-reads of a burst the memory answered with SLVERR before its rays are flagged read error (0: flag at once)",
       Ints(0, PlatformParams.MaxMemRetries), shapes = true, Use.circuit),
     Knob("SHORT_STACK", "short-stack", "ring of that many entries with restart instead of the full stack (0: the full stack)", Ints(0, 64), shapes = true, Use.tree),
+    Knob("MAX_STEPS", "max-steps", "fetches (node or leaf) a ray may issue; a ray that needs more is flagged prim -4 (0: no limit; " +
+      "default: a bound no ray of an uncorrupted image reaches, PlatformParams.stepBound)",
+      Ints(1, math.min(HwLimits().stepMax, Int.MaxValue.toLong).toInt, zero = true), shapes = true, Use.tree),
     Knob("BOX_FORMAT", "box-format", "arithmetic of the ray-box test (narrower ones round outward; m<M> fits the exponent to the scene)",
       AnyOf(Names(Seq("fp32", "fp24", "bf16", "fp16")), Template(Seq(("e", 3, 8), ("m", 2, 23))), Template(Seq(("m", 2, 23)))), shapes = true, Use.arithmetic,
       cal("fp32")(_.boxFormat.name)),

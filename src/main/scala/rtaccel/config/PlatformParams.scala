@@ -74,6 +74,9 @@ final case class HwLimits(
   levelCodeBits: Int = 4,     // paper Section 7.2: node levels 0..14, 15 = 15 and deeper
   mcCounterBits: Int = 48,    // the MC's and its caches' event counters (never cleared by traffic: 2^48 events)
   policyStateBits: Int = 10,  // replacement state per set the RTL tabulates (2^bits rows: true LRU to 4 ways, PLRU to 8)
+  // the MAX_STEPS register and each TU's count of the fetches its ray has left: a ray of the largest tree the 32-bit
+  // address space holds stays below 2^32 fetches (PlatformParams.stepBound)
+  stepBits: Int = 32,
   // MEM_CHANNELS > 1: bytes of one channel's address block (channel = (addr / this) mod channels); a burst never
   // crosses 4 KB (BurstSplitter), so a block of 4 KB or more keeps every burst in one channel
   channelInterleaveBytes: Int = 4096
@@ -92,8 +95,11 @@ final case class HwLimits(
   require(policyStateBits >= 1 && policyStateBits <= 12, s"policy state must be 1..12 bits (got $policyStateBits): the RTL tabulates 2^bits rows per policy function")
   require(mcCounterBits >= 32 && mcCounterBits <= 64, s"MC counters must be 32..64 bits (got $mcCounterBits): the register map reads them as LO/HI words")
   require(levelCodeBits >= 1 && levelCodeBits <= 6, s"level code must be 1..6 bits (got $levelCodeBits); the RTL tabulates 2^bits x 2^bits classes")
+  require(stepBits >= 8 && stepBits <= 32, s"the step count must be 8..32 bits (got $stepBits): MAX_STEPS is one 32-bit register")
   /** the highest level code: levels at or beyond it share it */
   val maxLevelCode: Int = (1 << levelCodeBits) - 1
+  /** the largest MAX_STEPS the register holds */
+  val stepMax: Long = (1L << stepBits) - 1
 }
 
 /** The one configuration object for the reference model, analysis and (later) the RTL generators.
@@ -119,6 +125,9 @@ final case class PlatformParams(
   hw: HwLimits = HwLimits(),
   shortStack: Int = 0, // > 0: a ring of that many entries with restart instead of the full stack
   treeLevels: Int = 64, // node levels a TU can walk: the short stack keeps one trail counter per level
+  // MAX_STEPS: fetches (node or leaf) a ray may issue; a ray that needs one more is flagged prim -4 and ends there
+  // (docs/architecture.md, "Step limit"). None: stepBound, which no ray of an uncorrupted image reaches; 0: no limit
+  maxSteps: Option[Int] = None,
   boxFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // arithmetic of the slab test; narrower ones round outward
   triTest: TriTest = TriTest.Mt, // the ray-triangle test (Numerics: the formats every JSON line names)
   nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (bvh.Quantize, bvh.QNodeLayout)
@@ -184,6 +193,8 @@ final case class PlatformParams(
   require(mppl <= refs.maxLeafPrims,
     s"MPPL $mppl does not fit the ${refs.countBits}-bit leaf count field (max ${refs.maxLeafPrims}); lower MPPL or widen countBits")
   require(stackDepth >= 1, s"stack depth must be at least 1 (got $stackDepth)")
+  require(maxSteps.forall(s => s >= 0 && s <= hw.stepMax),
+    s"MAX_STEPS must be 0 (no limit) or 1..${hw.stepMax} fetches, the ${hw.stepBits}-bit register (got ${maxSteps.get})")
   require(clockMhz > 0, "clock must be positive")
   require(sahBins >= 2, "SAH needs at least 2 bins")
   require(Seq(64, 128, 256, 512).contains(axiDataBits), s"AXI data width must be 64, 128, 256 or 512 bits (got $axiDataBits)")
@@ -247,6 +258,27 @@ final case class PlatformParams(
     val e = boxFormat.manBits + 1 - Numerics.watertightBoxSlackLog2
     if (triTest != TriTest.Watertight) 0 else if (e <= 0) 1 else 1 << e
   }
+  /** The default step limit: more fetches than any ray of an uncorrupted image this configuration can address makes.
+    * With the full stack a ray fetches each node and each leaf at most once (each is pushed or entered only from its
+    * one parent, fetched once), so nodes + leaves bounds it; the short stack's restarts fetch again at most the path
+    * from the root (treeLevels nodes and the restart's own) once per finished subtree, hence the factor treeLevels + 2.
+    * The counts are bounded by what the references can name and the memory hold: node ids of nodeIdBits, leaves by
+    * their first field of primIndexBits (each with a primitive slot, or a packed row, of its own), each within the
+    * axiAddrBits address space. CONFIG=fit sizes the fields to the scene (2^bits <= 2 x the count), so the default
+    * is 1-2 x nodes + primitives, itself at least nodes + leaves: a loop through a corrupted image ends after about
+    * that many fetches, and no correct ray is ever flagged. Capped at the register's largest value, which only a
+    * short stack over a tree larger than the address space could need.
+    */
+  lazy val stepBound: Long = {
+    val memBytes = 1L << math.min(hw.axiAddrBits, 62)
+    val nodes = math.min(1L << refs.nodeIdBits, memBytes / nodeSlotBytes)
+    val leaves = math.min(1L << refs.primIndexBits, memBytes / (if (primPacked) leafRowBytes else primStrideBytes))
+    val perVisit = if (shortStack > 0) treeLevels + 2L else 1L
+    val b = BigInt(nodes + leaves) * perVisit
+    if (b > hw.stepMax) hw.stepMax else b.toLong
+  }
+  /** The MAX_STEPS register's value after reset: MAX_STEPS= when given, else stepBound (0 = no limit). */
+  lazy val stepLimit: Long = maxSteps.fold(stepBound)(_.toLong)
   val tuBits: Int = math.max(1, 32 - Integer.numberOfLeadingZeros(tus - 1))
   /** TUs per IU cluster: TU i belongs to cluster i / tusPerIu (its IU, MC and caches). */
   val tusPerIu: Int = tus / ius

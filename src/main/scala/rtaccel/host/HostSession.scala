@@ -26,6 +26,7 @@ object HostSession {
     host.write(PrimBaseLo, primBaseBytes & 0xffffffffL)
     host.write(PrimBaseHi, primBaseBytes >>> 32)
     host.write(MaxLevel, p.nodeCache.maxLevel)
+    host.write(MaxSteps, p.stepLimit)
     host.write(RayCount, rayCount)
     host.write(IrqEnable, bits(IrqEnable, "DONE"))
     host.write(Control, bits(Control, "CLEAR_COUNTERS"))

@@ -36,6 +36,30 @@ object ImageFile {
     w
   }
 
+  /** The image as the platform reads it, for the model to traverse: node ids over the whole id field and primitive
+    * slots over the whole first field (plus a leaf's largest count), each read from memory where the platform reads
+    * it (past the image: the gap before the primitives, the primitives, zeros), so that the stray references of a
+    * corrupted image read the same words in the model as in the RTL. Every address those fields can name must lie in
+    * the `capacityBytes` of memory (a fitted layout); slot64 primitives.
+    */
+  def asRead(img: MemoryImage, lay: ImageLayout, axi: AxiParams, capacityBytes: Long): MemoryImage = {
+    val p = img.p
+    require(!p.primPacked, "the memory view of an image takes PRIM_FORMAT=slot64")
+    val nodeWords = (1L << p.refs.nodeIdBits) * img.nodeWords
+    val primWords = ((1L << p.refs.primIndexBits) + p.refs.maxLeafPrims) * img.primWords
+    require(4 * nodeWords <= capacityBytes && lay.primBaseBytes + 4 * primWords <= capacityBytes,
+      s"the reference fields (${p.refs.nodeIdBits}-bit node ids, ${p.refs.primIndexBits}-bit primitive indices) name addresses " +
+        s"beyond the $capacityBytes B of memory; fit the layout to the scene")
+    val flat = flatWords(img, lay, axi)
+    def read(from: Long, n: Long): Array[Int] = {
+      val out = new Array[Int](n.toInt)
+      val k = math.max(0L, math.min(n, flat.length - from)).toInt
+      System.arraycopy(flat, from.toInt, out, 0, k)
+      out
+    }
+    MemoryImage(p, read(0, nodeWords), read(lay.primBaseBytes / 4, primWords))
+  }
+
   private val hexDigits = "0123456789abcdef".toCharArray
 
   def write(img: MemoryImage, axi: AxiParams, path: Path): ImageLayout = {

@@ -6,9 +6,11 @@ import rtaccel.scene.{Hits, Rays}
 /** Per-ray counters a traversal unit would keep. */
 final class RayStats {
   var nodeFetches = 0L; var leafFetches = 0L; var primTests = 0L; var boxTests = 0L
-  var maxStack = 0; var overflows = 0; var readErrors = 0; var restarts = 0L
-  // which rays carry each fault flag: a ray can carry both, and its record then shows only the read error
+  var maxStack = 0; var overflows = 0; var readErrors = 0; var stepLimits = 0; var restarts = 0L
+  // which rays carry each fault flag: a ray can carry several, and its record then shows the first of read error,
+  // step limit, overflow (Traversal.record)
   val overflowRays = scala.collection.mutable.BitSet(); val readErrorRays = scala.collection.mutable.BitSet()
+  val stepLimitRays = scala.collection.mutable.BitSet()
   var primBytes = 0L // DRAM bytes of the leaves fetched (PlatformParams.leafBytes)
 }
 
@@ -25,6 +27,10 @@ final class RayStats {
   * (params.stackDepth entries) is dropped, the ray is flagged and traversal carries on, so that the
   * accesses stay identical to the hardware's; the flagged ray's hit record is `Hits.Overflow` (prim -3,
   * t = +inf, u = v = 0), never a plausible wrong hit.
+  * Step limit (docs/architecture.md, "Step limit"): a step is one fetch, node or leaf, counted as the TU counts its
+  * requests; a ray that has made params.stepLimit fetches (0: no limit) and needs another stops there, unfetched,
+  * and its record is `Hits.StepLimit` (prim -4): a loop through a corrupted image ends. With the short stack a node
+  * deeper than the trail's treeLevels levels ends the ray the same way.
   */
 final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   // The hot loop reads the image's word arrays directly and keeps its state in private[this] fields and
@@ -37,6 +43,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   // record k of the leaf whose first field is f: word f * firstWords + k * recordWords (slot64 or packed rows)
   private[this] val firstWords = img.firstWords; private[this] val recordWords = img.recordWords
   private[this] val faulty = faults.enabled
+  private[this] val stepLimit = p.stepLimit // 0: no limit
   private[this] val sRef = new Array[Int](p.stackDepth); private[this] val sT = new Array[Float](p.stackDepth)
   private[this] val sLvl = new Array[Int](p.stackDepth)
   private[this] val cRef = new Array[Int](m); private[this] val cT = new Array[Float](m)
@@ -74,6 +81,9 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
   private[this] var boxTests = 0L; private[this] var maxStack = 0
   private[this] var primBytes = 0L // DRAM bytes of the leaves fetched (PlatformParams.leafBytes)
   // the closest hit found so far in the current ray's leaves, and whether a primitive read failed
+  // (whether there is one is a flag of its own: the id is the record's word as memory holds it, and a corrupted image
+  // may hold a negative one, which the TU returns as it reads it)
+  private[this] var hasHit = false
   private[this] var hitPrim = -1; private[this] var hitU = 0f; private[this] var hitV = 0f; private[this] var primError = false
   // TRI_TEST=watertight: the sheared-edge test (null: Möller–Trumbore)
   private[this] val watertight = if (p.triTest == rtaccel.config.TriTest.Watertight) new RayTriangleWatertight else null
@@ -103,7 +113,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
     r.set(rays.data, i); regular = nanFreeBoxes && r.regular; ordered = regular && orderedBoxes
     nearX = if (r.ix > 0f) 0 else 3; nearY = if (r.iy > 0f) 0 else 3; nearZ = if (r.iz > 0f) 0 else 3
     nodeFetches = 0L; leafFetches = 0L; primTests = 0L; boxTests = 0L; maxStack = 0; primBytes = 0L
-    hitPrim = -1; hitU = 0f; hitV = 0f; primError = false
+    hasHit = false; hitPrim = -1; hitU = 0f; hitV = 0f; primError = false
   }
 
   private def traceShort(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
@@ -117,11 +127,14 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
       if (level >= 1) trail(level - 1) += 1
       var l = level; while (l < trail.length) { trail(l) = 0; l += 1 }
     }
-    var cur = 0; var curLevel = 0; var running = true; var readError = false
+    var cur = 0; var curLevel = 0; var running = true; var readError = false; var limited = false
     while (running) {
       if (curLevel + 1 >= trail.length) trail = java.util.Arrays.copyOf(trail, trail.length * 2)
       var descended = false
-      if (!codec.isPrim(cur)) {
+      // ends here, unfetched: out of steps, or a node below the trail's treeLevels levels (no tree that fits the trail
+      // has one: only a loop through a corrupted image makes it; the TU's trail could not track it)
+      if (outOfSteps || (curLevel >= p.treeLevels && !codec.isPrim(cur))) { limited = true; running = false; descended = true }
+      else if (!codec.isPrim(cur)) {
         val id = codec.nodeId(cur)
         sink.node(i, id, curLevel); nodeFetches += 1
         val bad = faulty && faults.nodeBad(id) // as the full stack: no child of a poisoned node is trusted
@@ -159,17 +172,21 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
         }
       }
     }
-    record(i, out, st, tmax, overflowed = false, readError || primError)
+    record(i, out, st, tmax, overflowed = false, readError || primError, limited)
   }
+
+  /** The current ray has made stepLimit fetches and may make no more. */
+  @inline private def outOfSteps: Boolean = stepLimit != 0 && nodeFetches + leafFetches == stepLimit
 
   private def traceFull(i: Int, rays: Rays, out: Hits, sink: AccessSink, st: RayStats): Unit = {
     start(i, rays)
     var tmax = r.tmax
     var sp = 0
-    var overflowed = false; var readError = false
+    var overflowed = false; var readError = false; var limited = false
     var cur = 0; var curLevel = 0; var hasCur = true // root node: ref 0 means node id 0
     while (hasCur) {
-      if (!codec.isPrim(cur)) {
+      if (outOfSteps) { limited = true; hasCur = false; sp = 0 } // ends here, unfetched
+      else if (!codec.isPrim(cur)) {
         val id = codec.nodeId(cur)
         sink.node(i, id, curLevel); nodeFetches += 1
         val bad = faulty && faults.nodeBad(id) // no child of a poisoned node is trusted
@@ -189,21 +206,24 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
         if (!(sT(sp) > tmax)) { cur = sRef(sp); curLevel = sLvl(sp); hasCur = true }
       }
     }
-    record(i, out, st, tmax, overflowed, readError || primError)
+    record(i, out, st, tmax, overflowed, readError || primError, limited)
   }
 
-  /** Writes ray i's hit record: a fault record (a read error wins over an overflow), the closest hit, or a miss;
-    * adds the ray's counters to `st`.
+  /** Writes ray i's hit record: a fault record (a read error wins over the step limit, and that over an overflow:
+    * a reported memory error is a certain cause, a loop through a corrupted image usually fills the stack too), the
+    * closest hit, or a miss; adds the ray's counters to `st`.
     */
-  private def record(i: Int, out: Hits, st: RayStats, tmax: Float, overflowed: Boolean, readError: Boolean): Unit = {
+  private def record(i: Int, out: Hits, st: RayStats, tmax: Float, overflowed: Boolean, readError: Boolean, limited: Boolean): Unit = {
     st.nodeFetches += nodeFetches; st.leafFetches += leafFetches; st.primTests += primTests; st.boxTests += boxTests; st.primBytes += primBytes
     if (maxStack > st.maxStack) st.maxStack = maxStack
     if (overflowed) { st.overflows += 1; st.overflowRays += i }
     if (readError) { st.readErrors += 1; st.readErrorRays += i }
-    if (readError || overflowed) {
-      out.t(i) = Float.PositiveInfinity; out.prim(i) = if (readError) Hits.ReadError else Hits.Overflow; out.u(i) = 0f; out.v(i) = 0f
+    if (limited) { st.stepLimits += 1; st.stepLimitRays += i }
+    if (readError || limited || overflowed) {
+      out.t(i) = Float.PositiveInfinity; out.u(i) = 0f; out.v(i) = 0f
+      out.prim(i) = if (readError) Hits.ReadError else if (limited) Hits.StepLimit else Hits.Overflow
     }
-    else if (hitPrim >= 0) { out.t(i) = tmax; out.prim(i) = hitPrim; out.u(i) = hitU; out.v(i) = hitV }
+    else if (hasHit) { out.t(i) = tmax; out.prim(i) = hitPrim; out.u(i) = hitU; out.v(i) = hitV }
   }
 
   /** Tests the primitives of leaf `ref` in slot order against [tmin, tmax); a hit closer than tmax becomes
@@ -224,7 +244,7 @@ final class Traversal(img: MemoryImage, faults: MemFaults = MemFaults.none) {
             f(prims(w + 4)), f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)
           else watertight.test(r, tmax, f(prims(w)), f(prims(w + 1)), f(prims(w + 2)), f(prims(w + 3)), f(prims(w + 4)),
             f(prims(w + 5)), f(prims(w + 6)), f(prims(w + 7)), f(prims(w + 8)), tri)) {
-        tmax = tri.t; hitPrim = prims(w + 9); hitU = tri.u; hitV = tri.v
+        tmax = tri.t; hasHit = true; hitPrim = prims(w + 9); hitU = tri.u; hitV = tri.v
       }
       k += 1
     }

@@ -66,6 +66,8 @@ object Hits {
   val Miss: Int = -1
   val ReadError: Int = -2
   val Overflow: Int = -3
+  /** The ray needed more fetches than MAX_STEPS (a loop through a corrupted image): it ended there. */
+  val StepLimit: Int = -4
 
   /** hits.npy as Hits.save writes it (and make golden). */
   def load(path: java.nio.file.Path): Hits = {

@@ -36,6 +36,8 @@ object PlatformRun {
     "status_done" -> !j("status")("done").bool,
     "status_read_error" -> (j("status")("read_error").bool != (j("read_errors").num > 0)),
     "status_overflow" -> (j("status")("overflow").bool != (j("overflowed").num > 0)), "read_errors_vs_model" -> (j("read_error_disagreements").num > 0),
+    "step_limit_vs_model" -> (j("step_limit_disagreements").num > 0),
+    "status_step_limit" -> (j("status")("step_limit").bool != (j("step_limit_rays").num > 0)),
     // TLAST on exactly one hit beat, the batch's last (none for an empty batch)
     "hit_tlast" -> (j("hit_tlast")("beats").num != math.min(1, j("rays").num) || j("hit_tlast")("at").num != math.max(0, j("rays").num - 1)),
     // null when there is no cache to compare
@@ -52,10 +54,10 @@ object PlatformRun {
   }
 
   /** The hit stream as the host captured it, by ray id: each record, how often it came, its fault flags. */
-  final case class RtlHits(hits: Hits, seen: Array[Int], overflow: Array[Boolean], readError: Array[Boolean])
+  final case class RtlHits(hits: Hits, seen: Array[Int], overflow: Array[Boolean], readError: Array[Boolean], stepLimit: Array[Boolean])
 
   private def readHits(dut: SimHarness, received: Long, count: Int): RtlHits = {
-    val r = RtlHits(Hits.empty(count), new Array[Int](count), new Array[Boolean](count), new Array[Boolean](count))
+    val r = RtlHits(Hits.empty(count), new Array[Int](count), new Array[Boolean](count), new Array[Boolean](count), new Array[Boolean](count))
     for (k <- 0 until math.min(received, count.toLong).toInt) {
       dut.io.readIdx.poke(k.U)
       val w = dut.io.readData.peek().litValue
@@ -65,14 +67,14 @@ object PlatformRun {
         r.seen(id) += 1
         r.hits.t(id) = java.lang.Float.intBitsToFloat(word(1)); r.hits.prim(id) = word(2)
         r.hits.u(id) = java.lang.Float.intBitsToFloat(word(3)); r.hits.v(id) = java.lang.Float.intBitsToFloat(word(4))
-        r.overflow(id) = (word(5) & 1) != 0; r.readError(id) = (word(5) & 2) != 0
+        r.overflow(id) = (word(5) & 1) != 0; r.readError(id) = (word(5) & 2) != 0; r.stepLimit(id) = (word(5) & 4) != 0
       }
     }
     r
   }
 
   /** RTL against the model, ray by ray: raw bits of every field, and each fault flag against the model's record. */
-  final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int)
+  final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int, stepLimitDisagree: Int)
 
   /** `mayFail`: MEM_ERROR_MODE=transient with MEM_RETRIES=0, where which ray first reads a poisoned beat depends on
     * timing: the rays that may come back flagged read error (those whose traversal reads a poisoned beat). Such a ray
@@ -88,7 +90,8 @@ object PlatformRun {
       lost = rtl.seen.count(_ == 0),
       // each flag against the model's own flag: a ray that overflowed and read an error carries both
       overflowDisagree = got.count(i => !excused(i) && rtl.overflow(i) != flags.overflowRays(i)),
-      readErrorDisagree = got.count(i => !excused(i) && rtl.readError(i) != flags.readErrorRays(i)))
+      readErrorDisagree = got.count(i => !excused(i) && rtl.readError(i) != flags.readErrorRays(i)),
+      stepLimitDisagree = got.count(i => !excused(i) && rtl.stepLimit(i) != flags.stepLimitRays(i)))
   }
 
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
@@ -102,14 +105,21 @@ object PlatformRun {
       pipelineMhz = None).toString + s" budget ${p.stageBudget}" + p.stageBudget.fold("")(_ => s" dsp ${p.dspShape} ram ${p.delayRamCycles}")).getBytes("UTF-8"))
       .take(5).map(b => f"${b & 0xff}%02x").mkString
 
-  /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised). */
-  def run(b: rtaccel.config.Built, rays: Rays, o: SimOptions): Outcome = {
+  /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised).
+    * `image`: the memory image to load instead of the tree's (a test's corrupted copy); the model then traverses
+    * memory as the platform reads it (ImageFile.asRead), stray references included.
+    */
+  def run(b: rtaccel.config.Built, rays: Rays, o: SimOptions, image: Option[MemoryImage] = None): Outcome = {
     val p = b.params
     CachePath.validate(p)
     val cached = p.nodeCache.entries > 0 || p.primCache.entries > 0
-    val img = MemoryImage.pack(b.bvh, b.scene, p)
+    val img = image.getOrElse(MemoryImage.pack(b.bvh, b.scene, p))
+    require(img.p == p, "the image was packed for another configuration")
     val axi = AxiParams.of(p)
     val lay0 = ImageFile.layout(img, axi)
+    val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
+    val wordCap = SimSetup.capacity((imageBytes + axi.beatBytes - 1) / axi.beatBytes, SimSetup.minImageBytes / axi.beatBytes)
+    val modelImg = if (image.isEmpty) img else ImageFile.asRead(img, lay0, axi, wordCap.toLong * axi.beatBytes)
     // the poisoned beats the DRAM model will answer with SLVERR (MEM_ERROR_RATE), known to the model
     val faults = MemFaults(o.errorThreshold, o.seed, axi.beatBytes, p.nodeSlotBytes, lay0.primBaseBytes, p.primStrideBytes)
     val tModel = System.nanoTime()
@@ -120,10 +130,10 @@ object PlatformRun {
     // re-read is clean, so with MEM_RETRIES > 0 no ray is, and with 0 the ray that reads it first (timing decides
     // which: any ray that reads a poisoned beat may be flagged, and the others equal the fault-free model)
     val seen = if (o.errorSticky) faults else MemFaults.none
-    val model = new Traversal(img, seen).traceAll(rays, if (cached) rec else AccessSink.none, stats)
+    val model = new Traversal(modelImg, seen).traceAll(rays, if (cached) rec else AccessSink.none, stats)
     val mayFail = if (o.errorSticky || p.memRetries > 0 || !faults.enabled) None else {
       val s = new RayStats
-      new Traversal(img, faults).traceAll(rays, AccessSink.none, s)
+      new Traversal(modelImg, faults).traceAll(rays, AccessSink.none, s)
       Some(s.readErrorRays)
     }
     val accessRows = rec.toArray
@@ -135,9 +145,7 @@ object PlatformRun {
     val dram = DramConfig(latencyCycles = p.memory.latencyCycles, bytesPerCycleNum = math.round(p.memBytesPerCycle * den).toInt,
       bytesPerCycleDen = den, randomExtraLatency = o.memJitter, seed = o.seed, errorThreshold = o.errorThreshold, errorSeed = o.seed)
     // One folder per simulator build: everything that changes the circuit is in its name.
-    val imageBytes = img.nodes.length * 4L + 4096 + img.prims.length * 4L
     val rayCap = SimSetup.capacity(rays.count, SimSetup.minRays)
-    val wordCap = SimSetup.capacity((imageBytes + axi.beatBytes - 1) / axi.beatBytes, SimSetup.minImageBytes / axi.beatBytes)
     val r = p.refs
     val key = s"tus${p.tus}" + (if (p.ius > 1) s"-ius${p.ius}" else "") + (if (p.memChannels > 1) s"-ch${p.memChannels}.${p.hw.channelInterleaveBytes}" else "") + s"-m${p.m}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-stack${p.stackDepth}" +
       s"-axi${p.axiDataBits}-div${p.divStages}-rays$rayCap-words$wordCap-lat${dram.latencyCycles}-bw${dram.bytesPerCycleNum}" +
@@ -151,7 +159,9 @@ object PlatformRun {
       (if (p.nodeQuantBits > 0) s"-node${Numerics.nodeFormatName(p.nodeQuantBits)}" else "") +
       s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + // HwLimits: in the digest
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "") +
-      s"-p${paramsDigest(p)}"
+      // MAX_STEPS is only the register's reset value, and the host writes the register before every batch
+      // (HostSession.configure): one simulator serves every limit
+      s"-p${paramsDigest(p.copy(maxSteps = None))}"
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
     val layout = ImageFile.write(img, axi, work.resolve("image.hex"))
@@ -204,8 +214,8 @@ object PlatformRun {
       val hits = rtl.hits
       val tHits = System.nanoTime()
       val cmp = compare(rtl, model, stats, mayFail)
-      import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree}
-      val (rtlOverflow, rtlReadError) = (rtl.overflow, rtl.readError)
+      import cmp.{lost, mismatch, overflowDisagree, readErrorDisagree, stepLimitDisagree}
+      val (rtlOverflow, rtlReadError, rtlStepLimit) = (rtl.overflow, rtl.readError, rtl.stepLimit)
       // caches: the RTL's counts against the trace model replaying the RTL's own access order (must be equal)
       // and against the model's N-TU interleaved order (the fast model's prediction)
       // one log per IU cluster, each the order its own caches saw
@@ -233,10 +243,10 @@ object PlatformRun {
       val duplicated = rtl.seen.count(_ > 1) + math.max(0L, received - rays.count).toInt
       // what the host got: a ray is usable when its record came back without a fault flag ("ok" says only that the
       // hardware did what the model says; a run whose every ray read an error is ok, and not healthy)
-      val usable = (0 until rays.count).count(i => rtl.seen(i) > 0 && !rtlOverflow(i) && !rtlReadError(i))
-      val (nOverflow, nReadError) = (rtlOverflow.count(identity), rtlReadError.count(identity))
+      val usable = (0 until rays.count).count(i => rtl.seen(i) > 0 && !rtlOverflow(i) && !rtlReadError(i) && !rtlStepLimit(i))
+      val (nOverflow, nReadError, nStepLimit) = (rtlOverflow.count(identity), rtlReadError.count(identity), rtlStepLimit.count(identity))
       System.err.println(s"[simulate] usable: $usable of ${rays.count} rays ($nReadError read errors, " +
-        s"$nOverflow stack overflows, ${rays.count - rtl.seen.count(_ > 0)} not returned)")
+        s"$nOverflow stack overflows, $nStepLimit step limits, ${rays.count - rtl.seen.count(_ > 0)} not returned)")
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
       val json = ujson.Obj(
@@ -259,12 +269,14 @@ object PlatformRun {
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> nReadError,
         "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,
         "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
+        "max_steps" -> p.stepLimit.toDouble, "step_limit_rays" -> nStepLimit, "model_step_limit_rays" -> stats.stepLimits,
+        "step_limit_disagreements" -> stepLimitDisagree,
         "mem_error_mode" -> (if (o.errorSticky) MemFaults.Sticky else MemFaults.Transient), "mem_retry_limit" -> p.memRetries,
         "mem_retries" -> counters("mem_retries").toDouble,
         // lookups that found their line poisoned (an errored fill) and read it again (null without a cache)
         "poison_refetches" -> (if (cached) ujson.Num(refetched.map(_.length).sum) else ujson.Null),
         "health" -> ujson.Obj("usable" -> usable, "read_error" -> nReadError, "overflow" -> nOverflow,
-          "retries" -> counters("mem_retries").toDouble, "error_beats" -> counters("mem_read_errors").toDouble),
+          "step_limit" -> nStepLimit, "retries" -> counters("mem_retries").toDouble, "error_beats" -> counters("mem_read_errors").toDouble),
         "hit_tlast" -> ujson.Obj("beats" -> tlasts.toDouble, "at" -> tlastAt.toDouble),
         "node_requests" -> counters("node_requests").toDouble, "model_node_fetches" -> stats.nodeFetches.toDouble,
         "prim_requests" -> counters("prim_requests").toDouble, "model_prim_tests" -> stats.primTests.toDouble,

@@ -23,6 +23,7 @@ class RegEvents extends Bundle {
   val hitOut = Bool()     // a hit left on the stream
   val readError = Bool()  // ... flagged with a memory read error
   val overflow = Bool()   // ... flagged with a stack overflow
+  val stepLimit = Bool()  // ... flagged with the step limit
 }
 
 /** The host interface of the board top (RegMap, docs/registers.md): an AXI4-Lite slave with one read and
@@ -33,7 +34,8 @@ class RegEvents extends Bundle {
   * `constants`: the read-only configuration words, by register.
   */
 class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], primBaseBits: Int, maxLevelReset: Int,
-              levelBits: Int) extends Module {
+              levelBits: Int, maxStepsReset: Long, stepBits: Int) extends Module {
+  require(maxStepsReset >= 0 && maxStepsReset < (1L << stepBits), s"MAX_STEPS reset value $maxStepsReset does not fit $stepBits bits")
   private val addrBits = RegMap.addrBits(counterNames)
   val io = IO(new Bundle {
     val lite = Flipped(new AxiLite(addrBits))
@@ -46,6 +48,7 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
     val clearCounters = Output(Bool())
     val primBase = Output(UInt(primBaseBits.W))
     val maxLevel = Output(UInt(levelBits.W))
+    val maxSteps = Output(UInt(stepBits.W))
   })
   import RegMap._
   private def bit(r: Reg, f: String): Int = r.fields.find(_.name == f).get.lsb
@@ -54,12 +57,14 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
   val rayCount = RegInit(0.U(32.W))
   val primBase = RegInit(0.U(64.W))
   val maxLevel = RegInit(maxLevelReset.U(levelBits.W))
+  val maxSteps = RegInit(maxStepsReset.U(stepBits.W))
   val irqEnable = RegInit(0.U(2.W))
   val irqStatus = RegInit(0.U(2.W))
   val running = RegInit(false.B)
   val done = RegInit(false.B)
   val stickyReadError = RegInit(false.B)
   val stickyOverflow = RegInit(false.B)
+  val stickyStepLimit = RegInit(false.B)
   val raysIn = RegInit(0.U(32.W))
   val hitsDone = RegInit(0.U(32.W))
 
@@ -84,17 +89,19 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
   when(wrote(PrimBaseLo)) { primBase := Cat(primBase(63, 32), wData) }
   when(wrote(PrimBaseHi)) { primBase := Cat(wData, primBase(31, 0)) }
   when(wrote(MaxLevel)) { maxLevel := wData(levelBits - 1, 0) }
+  when(wrote(MaxSteps)) { maxSteps := wData(stepBits - 1, 0) }
   when(wrote(IrqEnable)) { irqEnable := wData(1, 0) }
   val start = wrote(Control) && wData(bit(Control, "START"))
   val softReset = wrote(Control) && wData(bit(Control, "SOFT_RESET"))
   io.clearCounters := (wrote(Control) && wData(bit(Control, "CLEAR_COUNTERS"))) || softReset
 
   // ---- batch control and status
-  val errorEvent = io.events.hitOut && (io.events.readError || io.events.overflow)
+  val errorEvent = io.events.hitOut && (io.events.readError || io.events.overflow || io.events.stepLimit)
   when(io.events.rayIn) { raysIn := raysIn + 1.U }
   when(io.events.hitOut) { hitsDone := hitsDone + 1.U }
   when(io.events.hitOut && io.events.readError) { stickyReadError := true.B }
   when(io.events.hitOut && io.events.overflow) { stickyOverflow := true.B }
+  when(io.events.hitOut && io.events.stepLimit) { stickyStepLimit := true.B }
   val lastHit = running && io.events.hitOut && hitsDone + 1.U === rayCount
   val doneNow = lastHit || (start && rayCount === 0.U)
   when(doneNow) { running := false.B; done := true.B }
@@ -104,7 +111,7 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
   when(start && rayCount =/= 0.U) { running := true.B; done := false.B; raysIn := 0.U; hitsDone := 0.U }
   when(softReset) {
     running := false.B; done := false.B; raysIn := 0.U; hitsDone := 0.U
-    stickyReadError := false.B; stickyOverflow := false.B; irqStatus := 0.U
+    stickyReadError := false.B; stickyOverflow := false.B; stickyStepLimit := false.B; irqStatus := 0.U
   }
   io.acceptRays := running && raysIn < rayCount
   io.running := running
@@ -115,6 +122,7 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
   io.irq := (irqStatus & irqEnable).orR
   io.primBase := primBase(primBaseBits - 1, 0)
   io.maxLevel := maxLevel
+  io.maxSteps := maxSteps
 
   // ---- read channel: the data is registered with the AR handshake, then R
   val rValid = RegInit(false.B); val rData = RegInit(0.U(32.W)); val rResp = RegInit(0.U(2.W))
@@ -125,11 +133,11 @@ class RegFile(constants: Seq[(RegMap.Reg, BigInt)], counterNames: Seq[String], p
   // reading LO returns the live low word and keeps the high word of that instant for the HI read
   val snapHi = RegInit(0.U(32.W)); val snapIdx = RegInit(counterNames.length.U(log2Ceil(counterNames.length + 1).W)) // none yet: HI reads live
   val status = Seq("BUSY" -> (running || io.events.busy), "DONE" -> done, "READ_ERROR" -> stickyReadError,
-    "OVERFLOW" -> stickyOverflow, "RUNNING" -> running).map { case (f, v) => v.asUInt << bit(Status, f) }.reduce(_ | _)
+    "OVERFLOW" -> stickyOverflow, "RUNNING" -> running, "STEP_LIMIT" -> stickyStepLimit).map { case (f, v) => v.asUInt << bit(Status, f) }.reduce(_ | _)
   val table: Seq[(Int, UInt)] = constants.map { case (r, v) => r.offset -> v.U(32.W) } ++ Seq(
     Id.offset -> Magic.U(32.W), Version.offset -> ((VersionMajor << 16) | VersionMinor).U(32.W),
     Status.offset -> status, IrqEnable.offset -> irqEnable.pad(32), IrqStatus.offset -> irqStatus.pad(32),
-    MaxLevel.offset -> maxLevel.pad(32), RayCount.offset -> rayCount, PrimBaseLo.offset -> primBase(31, 0),
+    MaxLevel.offset -> maxLevel.pad(32), MaxSteps.offset -> maxSteps.pad(32), RayCount.offset -> rayCount, PrimBaseLo.offset -> primBase(31, 0),
     PrimBaseHi.offset -> primBase(63, 32), HitsDone.offset -> hitsDone, RaysIn.offset -> raysIn, Control.offset -> 0.U(32.W)) ++
     counterNames.indices.flatMap { i =>
       Seq(CounterBase + 8 * i -> io.counters(i)(31, 0),

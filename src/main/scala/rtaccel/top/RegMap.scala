@@ -68,9 +68,10 @@ object RegMap {
     Field("BUSY", 0, 1, "a batch is running or a TU holds a ray"), Field("DONE", 1, 1, "the last batch returned all its hits"),
     Field("READ_ERROR", 2, 1, "sticky: a ray hit a memory read error (its hit has prim -2)"),
     Field("OVERFLOW", 3, 1, "sticky: a ray overflowed its stack (its hit has prim -3)"),
-    Field("RUNNING", 4, 1, "accepting rays of the current batch")))
+    Field("RUNNING", 4, 1, "accepting rays of the current batch"),
+    Field("STEP_LIMIT", 5, 1, "sticky: a ray needed more fetches than MAX_STEPS (its hit has prim -4)")))
   val IrqEnable = Reg("IRQ_ENABLE", 0x028, RW, "interrupt enables (irq = IRQ_STATUS & IRQ_ENABLE)", Seq(
-    Field("DONE", 0, 1, "batch done"), Field("ERROR", 1, 1, "a read error or an overflow")))
+    Field("DONE", 0, 1, "batch done"), Field("ERROR", 1, 1, "a read error, an overflow or a step limit")))
   val IrqStatus = Reg("IRQ_STATUS", 0x02C, W1C, "pending interrupts", IrqEnable.fields)
   val MaxLevel = Reg("MAX_LEVEL", 0x030, RW, "MAX_LEVEL of the level replacement policy",
     Seq(Field("VALUE", 0, 6, "the low hw.levelCodeBits bits are kept (4 on the paper's platform)")))
@@ -86,6 +87,10 @@ object RegMap {
     Field("TRI_LATENCY", 16, 8, "cycles of the triangle test pipe of TRI_TEST (255: 255 or more)"),
     Field("PREP_LATENCY", 24, 8, "cycles of the TC's ray preparation, 1/d (255: 255 or more)")))
 
+  val MaxSteps = Reg("MAX_STEPS", 0x04C, RW, "fetches (node or leaf) a ray may make; a ray that needs more ends flagged, " +
+    "prim -4 (0 = no limit; reset: the generator's MAX_STEPS, by default a bound no ray of an uncorrupted image reaches). " +
+    "Each ray reads it as it starts: write it between batches", Seq(Field("VALUE", 0, 32, "the low hw.stepBits bits are kept (32 by default)")))
+
   val CounterBase = 0x100
   /** Counter i is LO at CounterBase + 8 i, HI at + 4. */
   def counterRegs(names: Seq[String]): Seq[Reg] = names.zipWithIndex.flatMap { case (n, i) =>
@@ -94,7 +99,7 @@ object RegMap {
   }
 
   val fixed: Seq[Reg] = Seq(Id, Version, Config0, Config1, NodeCache, PrimCache, Formats, Formats2, Control, Status, IrqEnable,
-    IrqStatus, MaxLevel, RayCount, PrimBaseLo, PrimBaseHi, HitsDone, RaysIn, Pipeline)
+    IrqStatus, MaxLevel, RayCount, PrimBaseLo, PrimBaseHi, HitsDone, RaysIn, Pipeline, MaxSteps)
   def all(counterNames: Seq[String]): Seq[Reg] = fixed ++ counterRegs(counterNames)
   /** Address bits of the AXI4-Lite port: the map with every counter fits. */
   def addrBits(counterNames: Seq[String]): Int = {

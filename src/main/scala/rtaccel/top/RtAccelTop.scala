@@ -19,7 +19,7 @@ class AxisBeat(bits: Int) extends Bundle {
 object RtAccelTop {
   /** Ray beat: 9 words, word i at bits 32i+31..32i: id, ox, oy, oz, dx, dy, dz, tmin, tmax. */
   val RayBits = 9 * 32
-  /** Hit beat: 6 words: id, t, prim, u, v, flags (bit 0 = stack overflow, bit 1 = memory read error). */
+  /** Hit beat: 6 words: id, t, prim, u, v, flags (bit 0 = stack overflow, bit 1 = memory read error, bit 2 = step limit). */
   val HitBits = 6 * 32
   /** Counted here, per cycle. */
   val eventNames: Seq[String] = Seq("cycles", "busy_cycles", "rays_in", "hits_out", "stall_iu_arbitration",
@@ -28,7 +28,10 @@ object RtAccelTop {
   val memoryNames: Seq[String] = Seq("node_requests", "leaf_requests", "prim_requests", "mem_bytes", "mem_busy_beats",
     "node_cache_hits", "node_cache_misses", "node_cache_bypasses", "prim_cache_hits", "prim_cache_misses", "prim_cache_bypasses",
     "mem_read_errors", "mem_retries")
-  val counterNames: Seq[String] = eventNames ++ memoryNames
+  /** Counted here too, after the memory controller's (counters keep their addresses as the map grows):
+    * rays that left flagged with the step limit. */
+  val rayFaultNames: Seq[String] = Seq("step_limit_rays")
+  val counterNames: Seq[String] = eventNames ++ memoryNames ++ rayFaultNames
 
   /** The read-only configuration registers of RegMap: what a host driver checks before it uploads anything. */
   def configWords(p: PlatformParams): Seq[(RegMap.Reg, BigInt)] = configWords(p, rtaccel.iu.PipeLatencies.of(p))
@@ -97,7 +100,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     respBufferBeats = if (p.mcResponseBuffers) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
   private val latencies = rtaccel.iu.PipeLatencies(ius.head.boxPipe.latency, ius.head.triLatency, tc.prepLatency)
-  val regs = Module(new RegFile(RtAccelTop.configWords(p, latencies), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits))
+  val regs = Module(new RegFile(RtAccelTop.configWords(p, latencies), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits,
+    p.stepLimit, p.hw.stepBits))
   regs.io.lite <> io.lite
   io.irq := regs.io.irq
 
@@ -108,7 +112,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   io.rays.ready := tc.io.in.ready && regs.io.acceptRays // rays flow only within a started batch
   io.hits.valid := tc.io.out.valid
   val h = tc.io.out.bits
-  io.hits.bits.tdata := Cat(0.U(30.W), h.readError, h.overflow, h.v, h.u, h.prim, h.t, h.id)
+  io.hits.bits.tdata := Cat(0.U(29.W), h.stepLimit, h.readError, h.overflow, h.v, h.u, h.prim, h.t, h.id)
   // TLAST on the hit that ends the batch (the RAY_COUNT-th of a started batch), so a DMA engine can end its
   // transfer there: hits are counted as they leave; the count clears between batches (RUNNING low)
   val hitsSent = RegInit(0.U(32.W))
@@ -119,6 +123,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   for ((tu, i) <- tus.zipWithIndex) {
     val (iu, k) = (ius(i / p.tusPerIu), i % p.tusPerIu)
     tu.io.index := k.U
+    tu.io.maxSteps := regs.io.maxSteps
     tu.io.ray <> tc.io.tuRay(i)
     tc.io.tuResult(i) <> tu.io.result
     iu.io.req(k) <> tu.io.req
@@ -179,7 +184,8 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   }
 
   // counters
-  val perf = Module(new PerfCounters(RtAccelTop.eventNames, incBits = log2Ceil(p.tus + 1)))
+  private val perfNames = RtAccelTop.eventNames ++ RtAccelTop.rayFaultNames
+  val perf = Module(new PerfCounters(perfNames, incBits = log2Ceil(p.tus + 1)))
   perf.io.clear := regs.io.clearCounters
   val tuBusy = tus.map(_.io.busy)
   val anyBusy = tuBusy.reduce(_ || _) || tc.io.out.valid
@@ -191,6 +197,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   regs.io.events.hitOut := late(io.hits.fire)
   regs.io.events.readError := late(h.readError)
   regs.io.events.overflow := late(h.overflow)
+  regs.io.events.stepLimit := late(h.stepLimit)
   def ev(b: UInt): UInt = { // PopCount of the TUs fits: incBits covers p.tus, so nothing is ever truncated
     require(b.getWidth <= perf.incBits, s"a ${b.getWidth}-bit event does not fit the ${perf.incBits}-bit counter increments")
     if (b.getWidth == perf.incBits) b.asUInt else Cat(0.U((perf.incBits - b.getWidth).W), b) // Bool.pad refuses to widen
@@ -206,10 +213,12 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     // an IU waits for data when one of its collections has a job and no beat (RESP_ORDER=path: either stream)
     "stall_memory_data" -> ev(PopCount(ius.map(iu => (iu.io.mem.resp +: iu.io.mem.primResp.toSeq).map(r => r.ready && !r.valid).reduce(_ || _)))),
     "stall_host_backpressure" -> ev(io.hits.valid && !io.hits.ready),
-    "tu_busy_cycles" -> countOf(tuBusy))
-  for ((n, i) <- RtAccelTop.eventNames.zipWithIndex) perf.io.events(i) := late(events(n))
+    "tu_busy_cycles" -> countOf(tuBusy), "step_limit_rays" -> ev(io.hits.fire && h.stepLimit))
+  for ((n, i) <- perfNames.zipWithIndex) perf.io.events(i) := late(events(n))
+  private def perfValue(n: String) = perf.io.values(perfNames.indexOf(n))
   val mcc = rtaccel.mc.McCounters.sum(mcs.map(_.io.counters) ++ nodeBanks.toSeq.flatMap(_.io.counters)) // in memoryNames order
-  regs.io.counters := VecInit(perf.io.values ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
+  regs.io.counters := VecInit(RtAccelTop.eventNames.map(perfValue) ++ Seq(mcc.nodeRequests, mcc.leafRequests, mcc.primsRequested,
     mcc.bytesRequested, mcc.busyBeats, mcc.nodeCache.hits, mcc.nodeCache.misses, mcc.nodeCache.bypasses,
-    mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses, mcc.readErrors, mcc.retries).map(_.pad(64)))
+    mcc.primCache.hits, mcc.primCache.misses, mcc.primCache.bypasses, mcc.readErrors, mcc.retries).map(_.pad(64)) ++
+    RtAccelTop.rayFaultNames.map(perfValue))
 }

@@ -22,6 +22,7 @@ class TuResult extends Bundle {
   val v = UInt(32.W)
   val overflow = Bool()
   val readError = Bool() // a node or primitive of this ray came with a memory error
+  val stepLimit = Bool() // the ray needed more fetches than MAX_STEPS and ended there
 }
 
 /** Traversal unit (paper Section 4): control flow and the traversal stack of one ray, in exactly the order
@@ -35,6 +36,10 @@ class TuResult extends Bundle {
   * With `p.shortStack` > 0 the stack is the short stack with restart (ShortStack, model.Traversal.traceShort):
   * a node skips the hit children its trail says are finished, pushes never fail, and when the ring runs dry
   * after a drop the TU restarts at the root; same fetches in the same order as the model.
+  * Step limit: each request to the IU (a node or a leaf) is a step; a ray takes `maxSteps` from the MAX_STEPS register
+  * when it starts (0: no limit), and when it has made that many and needs another it ends without it, flagged
+  * `stepLimit` (prim -4): a loop through a corrupted image cannot hold the TU (model.Traversal counts alike). With
+  * the short stack a node deeper than the trail's levels ends the ray the same way.
   */
 class TraversalUnit(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
@@ -45,6 +50,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
     val result = Decoupled(new TuResult)
     val busy = Output(Bool())
     val index = Input(UInt(p.tuBits.W)) // a port, not a parameter, so that every TU is one module
+    val maxSteps = Input(UInt(p.hw.stepBits.W)) // the MAX_STEPS register (0: no limit), read as a ray starts
   })
   private val index = io.index
   // with PIPELINE this TU's answers from the IU pass a register here: the compares of the TU's own tmax with an
@@ -68,6 +74,13 @@ class TraversalUnit(p: PlatformParams) extends Module {
   val best = Reg(new TuResult)
   val overflow = Reg(Bool())
   val readError = Reg(Bool())
+  val stepLimit = Reg(Bool())
+  // fetches the ray may still make, counted down from MAX_STEPS as the ray starts (so the register across the chip
+  // is read once per ray), whether it has a limit at all, and whether it has made them all: a register set as the
+  // last allowed request leaves, so the request's valid waits on no compare
+  val stepsLeft = Reg(UInt(p.hw.stepBits.W))
+  val limited = Reg(Bool())
+  val outOfSteps = Reg(Bool())
   class Entry extends Bundle { val cref = UInt(TraversalUnit.refBits.W); val t = UInt(TraversalUnit.distBits.W) }
   private val short = p.shortStack > 0
   // with PIPELINE the full stack's top entry is a register (FullStack): a pop's compare does not follow a RAM read
@@ -82,17 +95,25 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.busy := state =/= S.idle
   when(io.ray.fire) {
     r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B; readError := false.B
+    stepLimit := false.B; stepsLeft := io.maxSteps; limited := io.maxSteps =/= 0.U; outOfSteps := false.B
     best.id := io.ray.bits.id; best.t := inf; best.prim := "hffffffff".U; best.u := 0.U; best.v := 0.U
     stack.foreach(_.clear()); ss.foreach(_.start())
     state := S.issue
   }
 
-  io.req.valid := state === S.issue
+  // with the short stack, a node below the trail's treeLevels levels ends the ray alike: no tree that fits the trail
+  // (Fit.checkTrail) has one, only a loop through a corrupted image makes it, and the trail could not track it
+  private val tooDeep = ss.fold(false.B)(s => !cur(p.refs.refBits - 1) && s.level >= p.treeLevels.U)
+  io.req.valid := state === S.issue && !outOfSteps && !tooDeep
+  when(state === S.issue && (outOfSteps || tooDeep)) { stepLimit := true.B; state := S.done } // the fetch is not made
   io.req.bits.tu := index
   io.req.bits.cref := cur
   io.req.bits.tmax := tmax
   io.req.bits.ray.foreach(_ := r.ray) // RAY_STORE=1: the IU's ray store has it, and r.ray is never read
-  when(io.req.fire) { state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox) }
+  when(io.req.fire) {
+    state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox)
+    stepsLeft := stepsLeft - 1.U; outOfSteps := limited && stepsLeft === 1.U
+  }
 
   // Node: the hit children in the order of their ranks (the box pipe's: nearer first, an equal one in an earlier
   // slot first).
@@ -156,9 +177,12 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.result.bits := best
   io.result.bits.overflow := overflow
   io.result.bits.readError := readError
+  io.result.bits.stepLimit := stepLimit
   private def code(c: Int) = (c & 0xffffffffL).U(32.W)
-  when(overflow || readError) { // a read error wins over an overflow, as in the model
-    io.result.bits.t := inf; io.result.bits.prim := Mux(readError, code(rtaccel.scene.Hits.ReadError), code(rtaccel.scene.Hits.Overflow))
+  when(overflow || readError || stepLimit) { // read error, then step limit, then overflow, as in the model
+    import rtaccel.scene.Hits
+    io.result.bits.t := inf
+    io.result.bits.prim := Mux(readError, code(Hits.ReadError), Mux(stepLimit, code(Hits.StepLimit), code(Hits.Overflow)))
     io.result.bits.u := 0.U; io.result.bits.v := 0.U
   }
   when(io.result.fire) { state := S.idle }

@@ -95,6 +95,22 @@ class CliSpec extends AnyFunSuite {
       assert(h0.prim(i) == h1.prim(i) && java.lang.Float.floatToRawIntBits(h0.t(i)) == java.lang.Float.floatToRawIntBits(h1.t(i)), s"ray $i")
   }
 
+  test("MAX_STEPS: the rays that need more fetches get the step-limit record (prim -4), the others are unchanged; a negative value is refused") {
+    val free = dir.resolve("steps-default"); val tight = dir.resolve("steps-3")
+    val (c0, _, _) = captured(argv(free, Seq("--m", "2", "--mppl", "1")))(Trace.main0)
+    val (c1, _, _) = captured(argv(tight, Seq("--m", "2", "--mppl", "1", "--max-steps", "3")))(Trace.main0)
+    assert(c0 == 0 && c1 == 0)
+    val s0 = ujson.read(Files.readString(free.resolve("summary.json"))); val s = ujson.read(Files.readString(tight.resolve("summary.json")))
+    assert(s0("step_limit_rays").num == 0 && s0("max_steps").num >= s0("nodes").num + s0("leaves").num, "the default bounds every ray")
+    assert(s("max_steps").num == 3 && s("step_limit_rays").num > 0)
+    val h0 = Hits.load(free.resolve("hits.npy")); val h1 = Hits.load(tight.resolve("hits.npy"))
+    val flagged = (0 until h1.count).filter(i => h1.prim(i) == Hits.StepLimit)
+    assert(flagged.length == s("step_limit_rays").num.toInt && flagged.forall(i => h1.t(i).isPosInfinity))
+    for (i <- 0 until h1.count if !flagged.contains(i)) assert(h0.prim(i) == h1.prim(i), s"ray $i")
+    val (c2, _, err) = captured(argv(dir.resolve("steps-bad"), Seq("--max-steps", "-1")))(Trace.main0)
+    assert(c2 == 2 && err.startsWith("error: MAX_STEPS=-1: MAX_STEPS takes 0 or an integer 1..") && !Files.exists(dir.resolve("steps-bad")), err)
+  }
+
   test("property: random bad flag lists are refused with one error line, status 2, nothing written") {
     val r = new scala.util.Random(7)
     val names = Flags.trace.map(_.name)

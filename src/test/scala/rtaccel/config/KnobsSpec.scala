@@ -41,6 +41,7 @@ class KnobsSpec extends AnyFunSuite {
       "IUS" -> (v => base.copy(ius = v, tus = math.max(v, 1))),
       "MEM_CHANNELS" -> (v => base.copy(memChannels = v)),
       "SHORT_STACK" -> (v => base.copy(shortStack = v)),
+      "MAX_STEPS" -> (v => base.copy(maxSteps = Some(v))),
       "MAX_LEVEL" -> (v => base.copy(nodeCache = base.nodeCache.copy(maxLevel = v))),
       "NODE_BANKS" -> (v => base.copy(nodeBanks = v, ius = 1, respByPath = true, respTagged = true)))
     for ((make, params) <- cases; d = domainOf(make).asInstanceOf[Knobs.Ints];

@@ -149,4 +149,37 @@ class TraversalSpec extends AnyFunSuite {
       if (ring == 1) assert(short.restarts > 0, s"M=$m: a one-entry ring must restart")
     }
   }
+
+  test("step limit: a ray that needs more than MAX_STEPS fetches ends with its first MAX_STEPS and prim -4; the others are unchanged; no ray reaches the default") {
+    val s = TestScenes.soup(61, 1500); val rays = TestScenes.rays(62, 300)
+    val p = PlatformParams(m = 4, mppl = 2); val bvh = Mbvh.build(s, p)
+    def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
+    for (ring <- Seq(0, 2)) {
+      val fp = Fit.fitTo(p, bvh).copy(shortStack = ring)
+      def run(q: PlatformParams) = {
+        val acc = IndexedSeq.fill(rays.count)(scala.collection.mutable.ArrayBuffer[(Int, Int)]())
+        val sink = new AccessSink {
+          def node(ray: Int, id: Int, level: Int): Unit = acc(ray) += (0 -> id)
+          def leaf(ray: Int, firstPrim: Int, count: Int, level: Int): Unit = acc(ray) += (1 -> firstPrim)
+        }
+        val st = new RayStats
+        (new Traversal(MemoryImage.pack(bvh, s, q)).traceAll(rays, sink, st), acc, st)
+      }
+      val (h0, a0, st0) = run(fp)
+      val need = a0.map(_.length)
+      // the default bound: above every ray's need (for the full stack, nodes + leaves bounds it already)
+      assert(st0.stepLimits == 0 && need.max < fp.stepBound, s"ring $ring: a ray needs ${need.max}, the default is ${fp.stepBound}")
+      if (ring == 0) assert(need.max <= bvh.numNodes + bvh.numLeaves && fp.stepBound >= bvh.numNodes + bvh.numLeaves)
+      val limit = need.sorted.apply(need.length / 2)
+      val (h1, a1, st1) = run(fp.copy(maxSteps = Some(limit)))
+      for (i <- 0 until rays.count)
+        if (need(i) > limit) {
+          assert(a1(i) == a0(i).take(limit) && h1.prim(i) == Hits.StepLimit && h1.t(i).isPosInfinity && h1.u(i) == 0f && h1.v(i) == 0f, s"ring $ring ray $i")
+          assert(st1.stepLimitRays(i))
+        } else assert(a1(i) == a0(i) && h1.prim(i) == h0.prim(i) && bits(h1.t(i)) == bits(h0.t(i)) && !st1.stepLimitRays(i), s"ring $ring ray $i")
+      assert(st1.stepLimits == need.count(_ > limit) && st1.stepLimits > 0)
+      val (h2, _, st2) = run(fp.copy(maxSteps = Some(0))) // no limit
+      assert(st2.stepLimits == 0 && (0 until rays.count).forall(i => h2.prim(i) == h0.prim(i) && bits(h2.t(i)) == bits(h0.t(i))))
+    }
+  }
 }

@@ -46,13 +46,13 @@ class PlatformSpec extends AnyFunSuite {
                      short: Int = 0, box: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, tri: TriTest = TriTest.Mt,
                      packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1,
                      order: String = RespOrder.Request, rayStore: Boolean = false, forward: Boolean = false, banks: Int = 0,
-                     pipeline: Pipelining = Pipelining.Auto, family: String = "xc5v", errorMode: String = MemFaults.Sticky, retries: Int = 1) = {
+                     pipeline: Pipelining = Pipelining.Auto, family: String = "xc5v", errorMode: String = MemFaults.Sticky, retries: Int = 1, steps: Option[Int] = None) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
       shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels,
       respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward, nodeBanks = banks,
-      pipelining = pipeline, family = family, memRetries = retries)
+      pipelining = pipeline, family = family, memRetries = retries, maxSteps = steps)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels-b$banks", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec",
@@ -69,6 +69,7 @@ class PlatformSpec extends AnyFunSuite {
     if (exact) assert(j("read_errors").num == j("model_read_errors").num)
     assert(j("read_error_disagreements").num == 0)
     assert(j("health")("retries").num == j("counters")("mem_retries").num && j("mem_retry_limit").num == retries)
+    assert(j("step_limit_rays").num == j("model_step_limit_rays").num && j("step_limit_disagreements").num == 0)
     assert(j("ok").bool && j("failures").arr.isEmpty, ujson.write(j))
     // the hit stream's TLAST on the batch's last hit only; "usable" counts the records without a fault flag
     assert(j("hit_tlast")("beats").num == 1 && j("hit_tlast")("at").num == rays.count - 1, ujson.write(j("hit_tlast")))
@@ -372,6 +373,43 @@ class PlatformSpec extends AnyFunSuite {
       assert(perBank.length == banks && perBank.forall(_ > 0), s"every bank must have worked: $perBank")
       assert(per.sum + perBank.sum == j("node_requests").num + j("counters")("leaf_requests").num, "the logs must hold every access")
     }
+  }
+
+  // The step limit through the whole platform (register, TUs, hit word, status, counter, health) on the grid's 4-TU
+  // circuit: MAX_STEPS is the register's reset value only and the host writes it, so the build is the grid's own
+  test("MAX_STEPS written by the host: the rays that need more fetches end flagged prim -4, exactly the model's; STATUS, counter and health agree") {
+    val o = runOne(4, 2, 1, rays, scene, pipeline = Pipelining.Fixed, steps = Some(6))
+    val j = o.json
+    val limited = (0 until rays.count).filter(o.hits.prim(_) == rtaccel.scene.Hits.StepLimit)
+    info(s"${limited.length} of ${rays.count} rays needed more than 6 fetches")
+    assert(limited.nonEmpty && limited.length < rays.count, "some rays need more than 6 fetches, not all")
+    assert(j("max_steps").num == 6 && j("step_limit_rays").num == limited.length && j("health")("step_limit").num == limited.length)
+    assert(j("counters")("step_limit_rays").num == limited.length && j("status")("step_limit").bool)
+    assert(limited.forall(i => o.hits.t(i) == Float.PositiveInfinity && o.hits.u(i) == 0f && o.hits.v(i) == 0f))
+    assert(j("health")("usable").num + limited.length == rays.count)
+  }
+
+  // a memory image with silent bit flips (seeded) on the whole platform, at the default step limit of a fitted circuit
+  // (its own build: make regress only; make test checks the same flips at the TU, TraversalUnitSpec)
+  if (full) test("a loop and random silent bit flips in the memory image: the platform never hangs, every ray returns once, RTL == model with every flag") {
+    val p0 = Presets.paper2017.copy(tus = 4, m = 4, mppl = 4, nodeCache = CacheParams())
+    val b = Cli.build(scene, p0, fit = true)
+    val clean = rtaccel.bvh.MemoryImage.pack(b.bvh, b.scene, b.params)
+    var limited = 0.0
+    for (run <- 0 until 8) {
+      // a loop for certain, and the random flips around it
+      val img = TestScenes.flipBits(TestScenes.withLoop(clean, 300L + run), 300L + run, 60 + 20 * run)
+      val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(s"soup-flips-$run", build = Some(rtaccel.sim.VerilatorBuild.quick),
+        work = "build/sim-test/PlatformSpec"), image = Some(img))
+      val j = o.json
+      info(f"run $run: ${j("step_limit_rays").num}%.0f step limits (limit ${b.params.stepLimit}), ${j("overflowed").num}%.0f overflows, " +
+        f"${j("health")("usable").num}%.0f usable of ${rays.count}, ${j("cycles").num}%.0f cycles")
+      assert(!j("timed_out").bool && j("lost").num == 0 && j("duplicated").num == 0, ujson.write(j))
+      assert(j("mismatch_vs_model").num == 0 && j("step_limit_disagreements").num == 0 && j("overflow_disagreements").num == 0, ujson.write(j))
+      assert(j("ok").bool, ujson.write(j("failures")))
+      limited += j("step_limit_rays").num
+    }
+    assert(limited > 0, "some flips must make a loop that rays enter")
   }
 
   // make regress: make test's cache, IUS and all-formats cases run under jitter and backpressure already

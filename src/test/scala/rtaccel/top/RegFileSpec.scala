@@ -17,11 +17,13 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
   private val primBaseBits = 40 // wider than a word, so that PRIM_BASE_HI reaches the output too
   private val maxLevelReset = 9
   private val levelBits = 4
+  private val maxStepsReset = 0x12345L // the generator's MAX_STEPS (a scene's bound)
+  private val stepBits = 20 // narrower than the word, so that a write's high bits are seen to drop
   // configuration words of our own choosing: whatever the generator passes must read back unchanged
   private val constants: Seq[(RegMap.Reg, BigInt)] = Seq(Config0 -> BigInt(0x00200804L), Config1 -> BigInt(0x1f400040L),
     NodeCache -> BigInt(0x0003012dL), PrimCache -> BigInt(0x00000000L), Formats -> BigInt(0x00056700L), Formats2 -> BigInt(0x00000008L),
     Pipeline -> BigInt(0x22150d06L))
-  private def regFile = new RegFile(constants, counterNames, primBaseBits, maxLevelReset, levelBits)
+  private def regFile = new RegFile(constants, counterNames, primBaseBits, maxLevelReset, levelBits, maxStepsReset, stepBits)
   private val Magic = 0x52544143L // 'RTAC', docs
   private def lsb(r: Reg, f: String) = r.fields.find(_.name == f).get.lsb
   private val Start = 1L << lsb(Control, "START"); private val SoftReset = 1L << lsb(Control, "SOFT_RESET")
@@ -47,7 +49,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
       l.aw.valid.poke(false.B); l.w.valid.poke(false.B); l.b.ready.poke(false.B); l.ar.valid.poke(false.B)
       l.r.ready.poke(false.B); l.w.bits.strb.poke(15.U)
       val e = dut.io.events
-      for (b <- Seq(e.busy, e.rayIn, e.hitOut, e.readError, e.overflow)) b.poke(false.B)
+      for (b <- Seq(e.busy, e.rayIn, e.hitOut, e.readError, e.overflow, e.stepLimit)) b.poke(false.B)
     }
     private def fail(what: String) = throw new AssertionError(s"$what (host seed $seed, cycle $cycle)")
 
@@ -137,7 +139,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
     val fixed = Map[String, Long](
       "ID" -> Magic, "VERSION" -> ((VersionMajor.toLong << 16) | VersionMinor), "CONTROL" -> 0, "STATUS" -> 0,
       "IRQ_ENABLE" -> 0, "IRQ_STATUS" -> 0, "MAX_LEVEL" -> maxLevelReset, "RAY_COUNT" -> 0, "PRIM_BASE_LO" -> 0,
-      "PRIM_BASE_HI" -> 0, "HITS_DONE" -> 0, "RAYS_IN" -> 0) ++ constants.map { case (r, v) => r.name -> v.toLong }
+      "PRIM_BASE_HI" -> 0, "MAX_STEPS" -> maxStepsReset, "HITS_DONE" -> 0, "RAYS_IN" -> 0) ++ constants.map { case (r, v) => r.name -> v.toLong }
     val cnt = counterNames.zipWithIndex.flatMap { case (n, i) =>
       Seq(s"CNT_${n.toUpperCase}_LO" -> (counters(i) & 0xffffffffL).toLong, s"CNT_${n.toUpperCase}_HI" -> (counters(i) >> 32).toLong)
     }
@@ -169,7 +171,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
     withHost(seed) { (dut, h) =>
       val counters = distinctCounters(h.rnd)
       pokeCounters(dut, counters)
-      val directed = Seq(0x001, 0x002, 0x003, 0x01e, 0x035, 0x04c, 0x0fc, 0x101, 0x106,
+      val directed = Seq(0x001, 0x002, 0x003, 0x01e, 0x035, 0x04e, 0x050, 0x0fc, 0x101, 0x106,
         RegMap.CounterBase + 8 * counterNames.length, (1 << addrBits) - 4, (1 << addrBits) - 1)
       val random = Iterator.continually(h.rnd.nextInt(1 << addrBits)).filterNot(mapped).take(150).toSeq
       val offsets = directed ++ random
@@ -223,7 +225,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
       }
       val before = h.dump()
       val writable = regs.filter(_.access != RO)
-      assert(writable.map(_.name).toSet == Set("CONTROL", "IRQ_ENABLE", "IRQ_STATUS", "MAX_LEVEL", "RAY_COUNT", "PRIM_BASE_LO", "PRIM_BASE_HI"))
+      assert(writable.map(_.name).toSet == Set("CONTROL", "IRQ_ENABLE", "IRQ_STATUS", "MAX_LEVEL", "RAY_COUNT", "PRIM_BASE_LO", "PRIM_BASE_HI", "MAX_STEPS"))
       for (r <- writable; strb <- 0 until 15) {
         val resp = h.write(r.offset, 0xffffffffL, strb)
         assert(resp == AxiLite.SlvErr, s"partial write (strb $strb) to ${r.name}: response $resp, want SLVERR (seed $seed)")
@@ -233,26 +235,31 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
     }
   }
 
-  test("RW registers read back what was written; MAX_LEVEL, PRIM_BASE and RAY_COUNT - 1 (TLAST's index) reach their outputs") {
+  test("RW registers read back what was written; MAX_LEVEL, MAX_STEPS, PRIM_BASE and RAY_COUNT - 1 (TLAST's index) reach their outputs") {
     val seed = 5L
     withHost(seed) { (dut, h) =>
-      val width = Map("IRQ_ENABLE" -> 2, "MAX_LEVEL" -> levelBits, "RAY_COUNT" -> 32, "PRIM_BASE_LO" -> 32, "PRIM_BASE_HI" -> 32)
+      val width = Map("IRQ_ENABLE" -> 2, "MAX_LEVEL" -> levelBits, "RAY_COUNT" -> 32, "PRIM_BASE_LO" -> 32, "PRIM_BASE_HI" -> 32,
+        "MAX_STEPS" -> stepBits)
       val rw = regs.filter(_.access == RW)
       assert(rw.map(_.name).toSet == width.keySet)
       val shadow = scala.collection.mutable.Map[String, Long]("IRQ_ENABLE" -> 0, "MAX_LEVEL" -> maxLevelReset, "RAY_COUNT" -> 0,
-        "PRIM_BASE_LO" -> 0, "PRIM_BASE_HI" -> 0)
+        "PRIM_BASE_LO" -> 0, "PRIM_BASE_HI" -> 0, "MAX_STEPS" -> maxStepsReset)
+      var rayCountWritten = false // TLAST's index is RAY_COUNT - 1 from the first write of RAY_COUNT on (0 before: no batch)
       for (i <- 0 until 120) {
         val r = rw(h.rnd.nextInt(rw.length))
+        if (r.name == "RAY_COUNT") rayCountWritten = true
         val data = h.rnd.nextInt(4) match { case 0 => 0xffffffffL; case 1 => 0L; case _ => h.rnd.nextInt().toLong & 0xffffffffL }
         h.writeOk(r, data)
         shadow(r.name) = data & ((1L << width(r.name)) - 1)
         val q = rw(h.rnd.nextInt(rw.length))
         assert(h.readOk(q) == shadow(q.name), s"op $i: ${q.name} reads ${h.readOk(q)}, want ${shadow(q.name)} (seed $seed)")
         dut.io.maxLevel.expect(shadow("MAX_LEVEL").U, s"op $i (seed $seed)")
+        dut.io.maxSteps.expect(shadow("MAX_STEPS").U, s"op $i (seed $seed)")
         val base = (BigInt(shadow("PRIM_BASE_HI")) << 32) | BigInt(shadow("PRIM_BASE_LO"))
         assert(dut.io.primBase.peek().litValue == (base & ((BigInt(1) << primBaseBits) - 1)), s"op $i: primBase (seed $seed)")
         // the hit that ends a batch of RAY_COUNT rays has index RAY_COUNT - 1 (mod 2^32: a batch of 0 has none)
-        assert(dut.io.lastHitIndex.peek().litValue == ((shadow("RAY_COUNT") - 1) & 0xffffffffL), s"op $i: lastHitIndex (seed $seed)")
+        if (rayCountWritten)
+          assert(dut.io.lastHitIndex.peek().litValue == ((shadow("RAY_COUNT") - 1) & 0xffffffffL), s"op $i: lastHitIndex (seed $seed)")
         dut.io.irq.expect(false.B) // nothing pending
       }
       for (r <- rw) assert(h.readOk(r) == shadow(r.name), s"${r.name} (seed $seed)")
@@ -392,13 +399,13 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
     }
   }
 
-  test("READ_ERROR and OVERFLOW are sticky, set only by a flagged hit leaving, raise IRQ ERROR; SOFT_RESET clears them") {
+  test("READ_ERROR, OVERFLOW and STEP_LIMIT are sticky, set only by a flagged hit leaving, raise IRQ ERROR; SOFT_RESET clears them") {
     withHost(10L) { (dut, h) =>
       val ev = dut.io.events
-      def pulse(hit: Boolean, re: Boolean, ov: Boolean): Unit = {
-        ev.hitOut.poke(hit.B); ev.readError.poke(re.B); ev.overflow.poke(ov.B); h.step(); h.idle()
+      def pulse(hit: Boolean, re: Boolean, ov: Boolean, sl: Boolean = false): Unit = {
+        ev.hitOut.poke(hit.B); ev.readError.poke(re.B); ev.overflow.poke(ov.B); ev.stepLimit.poke(sl.B); h.step(); h.idle()
       }
-      def flags() = h.readOk(Status) & (st("READ_ERROR") | st("OVERFLOW"))
+      def flags() = h.readOk(Status) & (st("READ_ERROR") | st("OVERFLOW") | st("STEP_LIMIT"))
       h.writeOk(IrqEnable, IrqError)
       pulse(hit = false, re = true, ov = true)
       assert(flags() == 0 && h.readOk(IrqStatus) == 0)
@@ -414,6 +421,17 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
       assert(flags() == 0 && h.readOk(IrqStatus) == 0); dut.io.irq.expect(false.B)
       pulse(hit = true, re = false, ov = true)
       assert(flags() == st("OVERFLOW"))
+      // the step limit alike: only with a hit leaving, sticky, IRQ ERROR, cleared by SOFT_RESET alone
+      h.writeOk(IrqStatus, IrqError)
+      pulse(hit = false, re = false, ov = false, sl = true)
+      assert(flags() == st("OVERFLOW") && h.readOk(IrqStatus) == 0)
+      pulse(hit = true, re = false, ov = false, sl = true)
+      assert(flags() == (st("OVERFLOW") | st("STEP_LIMIT")) && h.readOk(IrqStatus) == IrqError); dut.io.irq.expect(true.B)
+      pulse(hit = true, re = false, ov = false)
+      h.writeOk(IrqStatus, IrqError)
+      assert(flags() == (st("OVERFLOW") | st("STEP_LIMIT")), "clearing the interrupt does not clear the sticky status")
+      h.writeOk(Control, SoftReset)
+      assert(flags() == 0 && h.readOk(IrqStatus) == 0)
     }
   }
 

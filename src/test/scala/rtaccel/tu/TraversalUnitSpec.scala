@@ -20,9 +20,9 @@ object TraversalUnitSpec {
     override def toString: String = if (kind == 0) s"node $id" else s"leaf $id+$count"
   }
   /** A hit record as raw bits. */
-  final case class Record(id: Long, t: Int, prim: Int, u: Int, v: Int, overflow: Boolean, readError: Boolean) {
+  final case class Record(id: Long, t: Int, prim: Int, u: Int, v: Int, overflow: Boolean, readError: Boolean, stepLimit: Boolean = false) {
     override def toString: String =
-      f"id $id t 0x$t%08x (${java.lang.Float.intBitsToFloat(t)}) prim $prim u 0x$u%08x v 0x$v%08x overflow $overflow readError $readError"
+      f"id $id t 0x$t%08x (${java.lang.Float.intBitsToFloat(t)}) prim $prim u 0x$u%08x v 0x$v%08x overflow $overflow readError $readError stepLimit $stepLimit"
   }
   final case class Run(accesses: IndexedSeq[Seq[Access]], records: IndexedSeq[Record], cycles: Long)
   final case class BoxAns(hit: Seq[Boolean], tnear: Seq[Int], cref: Seq[Int], err: Boolean)
@@ -56,7 +56,7 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     val recs = (0 until rays.count).map { i =>
       val st = new RayStats
       trav.trace(i, rays, hits, sink, st)
-      Record(ids(i), fbits(hits.t(i)), hits.prim(i), fbits(hits.u(i)), fbits(hits.v(i)), st.overflows > 0, st.readErrors > 0)
+      Record(ids(i), fbits(hits.t(i)), hits.prim(i), fbits(hits.u(i)), fbits(hits.v(i)), st.overflows > 0, st.readErrors > 0, st.stepLimits > 0)
     }
     Run(acc.map(_.toSeq), recs, 0)
   }
@@ -89,6 +89,7 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     test(new TraversalUnit(p)).withAnnotations(sim(p)) { dut =>
       dut.clock.setTimeout(0)
       dut.io.index.poke(index.U)
+      dut.io.maxSteps.poke(p.stepLimit.U) // the MAX_STEPS register's value after reset
       dut.io.ray.valid.poke(false.B); dut.io.req.ready.poke(false.B); dut.io.result.ready.poke(false.B)
       dut.io.box.valid.poke(false.B); dut.io.tri.valid.poke(false.B)
       var lastReqReady = false; var lastResReady = false; var boxValid = false; var triValid = false
@@ -213,7 +214,8 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
           if (resReady) {
             val b = dut.io.result.bits
             recs += Record(b.id.peek().litValue.toLong, b.t.peek().litValue.toInt, b.prim.peek().litValue.toInt,
-              b.u.peek().litValue.toInt, b.v.peek().litValue.toInt, b.overflow.peek().litToBoolean, b.readError.peek().litToBoolean)
+              b.u.peek().litValue.toInt, b.v.peek().litValue.toInt, b.overflow.peek().litToBoolean, b.readError.peek().litToBoolean,
+              b.stepLimit.peek().litToBoolean)
             running = false; i += 1
             gapUntil = cycle + 1 + (if (rnd.nextBoolean()) 0 else rnd.nextInt(4))
           }
@@ -279,6 +281,7 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
       info(s"$n rays, ${want.accesses.map(_.length).sum} fetches, $hits hits, ${got.cycles} cycles")
       assert(hits > n / 5 && hits < n, "the soup rays must both hit and miss")
       assert(want.records.forall(r => !r.overflow && !r.readError), "a fitted stack never overflows")
+      assert(want.records.forall(!_.stepLimit), s"the default step limit (${img.p.stepLimit}) flags no ray of an uncorrupted image")
     }
 
   test("a stack of depth 2 overflows: record prim -3, t = +inf, u = v = 0, overflow flag, same fetches as the model") {
@@ -484,4 +487,133 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     assert(g2.accesses(0) == Seq(root, Access(0, 1, 0), Access(0, 2, 0), leaf(2)), s"fetched ${g2.accesses(0)}")
     assert(g2.records(0).prim == -2 && g2.records(0).readError && !g2.records(0).overflow)
   }
+
+  // ---------------------------------------------------------------- step limit (MAX_STEPS): images that loop
+
+  test("step limit, directed: a node that points to itself or to its parent; the ray ends after MAX_STEPS fetches, prim -4") {
+    // (with the paper's layout a reference cannot name the root: ref 0 is an empty slot, so the loops start at node 1)
+    val limit = 12
+    val p = hp.copy(maxSteps = Some(limit))
+    val leafTri = Seq(xtri(2.5f, off = true))
+    // node 1: a leaf and, nearer, itself: root, then node 1 over and over, a push each time
+    val self = image(p, Seq(Seq((xbox(1, 9), hc.node(1, 1))), Seq((xbox(2, 3), hc.leaf(0, 1)), (xbox(1, 9), hc.node(1, 2)))), leafTri)
+    // node 2 points back to node 1, its parent: root, 1, 2, 1, 2, ...
+    val ancestor = image(p, Seq(Seq((xbox(1, 9), hc.node(1, 1))), Seq((xbox(1, 9), hc.node(2, 2))),
+      Seq((xbox(1, 9), hc.node(1, 3)), (xbox(5, 6), hc.leaf(0, 1)))), leafTri)
+    val n1 = Access(0, 1, 0); val n2 = Access(0, 2, 0)
+    for ((what, img, loop) <- Seq(("itself", self, Seq.fill(limit - 1)(n1)), ("its parent", ancestor, Seq.tabulate(limit - 1)(k => if (k % 2 == 0) n1 else n2)))) {
+      // the second ray ends before the loop's boxes (tmax), so it never enters the loop
+      val (got, w) = directed(s"loop to $what", img, Seq(axisRay(), axisRay(tmax = 0.5f)), 30)
+      assert(w.accesses(0) == root +: loop, s"$what: fetched ${w.accesses(0)}")
+      assert(got.records(0) == Record(got.records(0).id, fbits(Inf), Hits.StepLimit, 0, 0, overflow = false, readError = false, stepLimit = true),
+        got.records(0).toString)
+      assert(Hits.StepLimit == -4 && w.accesses(1) == Seq(root) && w.records(1).prim == Hits.Miss && !w.records(1).stepLimit)
+    }
+    // the loop in node 1 pushes its leaf each pass: at 40 steps the 32-entry stack has overflowed; the step limit wins
+    val (g40, w40) = directed("loop past the stack", self.copy(p = hp.copy(maxSteps = Some(40))), Seq(axisRay()), 31)
+    assert(w40.accesses(0).length == 40 && g40.records(0).overflow && g40.records(0).stepLimit && g40.records(0).prim == -4)
+    // a read error in the loop wins over the step limit: the leaf nearer than node 1 is fetched on every pass
+    val leafFirst = image(p, Seq(Seq((xbox(1, 9), hc.node(1, 1))), Seq((xbox(1, 3), hc.leaf(0, 1)), (xbox(2, 9), hc.node(1, 2)))), leafTri)
+    val (gre, _) = directed("read error in the loop", leafFirst, Seq(axisRay()), 32, primBad = _ == 0, check = false)
+    assert(gre.accesses(0) == root +: Seq.tabulate(limit - 1)(k => if (k % 2 == 0) n1 else leaf(0)), s"fetched ${gre.accesses(0)}")
+    assert(gre.records(0).readError && gre.records(0).stepLimit && gre.records(0).prim == Hits.ReadError)
+    // MAX_STEPS = 0: no limit; a loop-free tree ends as before, with as many fetches as it needs
+    val (g0, _) = directed("no limit", row.copy(p = hp.copy(maxSteps = Some(0))), Seq(axisRay()), 33)
+    assert(g0.accesses(0) == Seq(root, leaf(1), leaf(2)) && g0.records(0).prim == 102)
+    // exactly as many steps as the ray needs: not flagged; one fewer: flagged before its last fetch
+    val (g3, _) = directed("limit = need", row.copy(p = hp.copy(maxSteps = Some(3))), Seq(axisRay()), 34)
+    assert(g3.records(0).prim == 102 && !g3.records(0).stepLimit)
+    val (g2, _) = directed("limit = need - 1", row.copy(p = hp.copy(maxSteps = Some(2))), Seq(axisRay()), 35)
+    assert(g2.accesses(0) == Seq(root, leaf(1)) && g2.records(0).prim == -4 && g2.records(0).stepLimit)
+  }
+
+  /** The image after `flips` silent bit flips (TestScenes.flipBits), padded so that every reference a flip can make
+    * names words the model and the test's IU both read: node ids over the whole id field, primitive slots over the
+    * whole first field plus a leaf's largest count, zero beyond the packed image. The model traverses this image, not
+    * the tree it was packed from (the platform's test reads memory the same way: host.ImageFile.asRead).
+    */
+  private def corrupted(img: MemoryImage, seed: Long, flips: Int): MemoryImage = {
+    val p = img.p
+    require(p.refs.nodeIdBits <= 16 && p.refs.primIndexBits <= 16, "a fitted layout: the padded copy names every id")
+    val f = TestScenes.flipBits(img, seed, flips)
+    MemoryImage(p, java.util.Arrays.copyOf(f.nodes, (1 << p.refs.nodeIdBits) * img.nodeWords),
+      java.util.Arrays.copyOf(f.prims, ((1 << p.refs.primIndexBits) + p.refs.maxLeafPrims) * img.primWords))
+  }
+
+  // the fitted soup of the random-soup test above (seed 4, M=4, MPPL=2): the same TU circuit, built once
+  private def fittedSoup = soupImage(4, 200, PlatformParams(tus = 4, m = 4, mppl = 2), fit = true)
+
+  test("step limit at its default (fitted scene): a node made to point to itself flags the rays that loop after exactly stepBound fetches; the others keep their records") {
+    val clean = fittedSoup
+    val p = clean.p
+    val codec = new RefCodec(p.refs)
+    // the first inner node with an inner child: that child's reference now names the node itself
+    val (n, j) = (1 until clean.numNodes).iterator.flatMap(n => (0 until p.m).map(n -> _))
+      .find { case (n, j) => val r = clean.childRef(n, j); r != 0 && !codec.isPrim(r) }.get
+    val nodes = clean.nodes.clone()
+    nodes(n * clean.nodeWords + 7 * j + 6) = codec.node(n, codec.level(clean.childRef(n, j)))
+    val img = clean.copy(nodes = nodes)
+    val rays = soupRays(40, 200); val id = ids(200, 40)
+    val want = model(img, MemFaults.none, rays, id)
+    val got = rtl(p, img, rays, id, 40, index = 3)
+    compare("self loop at the default limit", 40, got, want, rays)
+    val before = model(clean, MemFaults.none, rays, id)
+    val flagged = want.records.indices.filter(want.records(_).stepLimit)
+    info(s"node $n slot $j names node $n: ${flagged.length} of ${rays.count} rays looped, ended after ${p.stepLimit} fetches " +
+      s"(${clean.numNodes} nodes, ${clean.numPrims} primitives; the longest clean ray made ${before.accesses.map(_.length).max})")
+    assert(flagged.nonEmpty && flagged.length < rays.count, "some rays must enter the loop, not all")
+    for (i <- flagged) assert(want.accesses(i).length == p.stepLimit && want.records(i).prim == Hits.StepLimit)
+    // a ray that went round the loop and left it (its tmax culled the looping child) keeps its record, unless the
+    // passes filled the fitted stack
+    for (i <- want.records.indices if !flagged.contains(i))
+      assert(want.records(i) == before.records(i) || want.records(i).prim == Hits.Overflow, s"ray $i left the loop with another record")
+  }
+
+  // make test: one corrupted image (loops, overflows and memory read errors together), 3 s; make regress: 60, some
+  // 6,000 flips in all, half of them over a loop made on purpose
+  for (run <- if (rtaccel.Regress.full) 0 until 60 else Seq(2))
+    test(s"step limit, random silent bit flips in the image (seeded, run $run): every ray ends once, fetches and records (flags included) equal the model's") {
+      val seed = 100L + run
+      val clean = fittedSoup
+      // odd runs: a loop for certain (a reference made to name its node or an ancestor) under the random flips
+      val img = corrupted(if (run % 2 == 1) TestScenes.withLoop(clean, seed) else clean, seed, flips = 60 + 30 * (run % 4))
+      val faults = if (run % 3 != 2) MemFaults.none else {
+        val primBase = 4096L * ((img.numNodes.toLong * img.p.nodeStrideBytes + 4095) / 4096)
+        MemFaults(MemFaults.threshold(0.003), seed.toInt, 32, img.p.nodeStrideBytes, primBase, 64)
+      }
+      val n = 200
+      val rays = soupRays(seed, n); val id = ids(n, seed)
+      val want = model(img, faults, rays, id)
+      val got = rtl(img.p, img, rays, id, seed, index = run % 4, faults.nodeBad, faults.primBad)
+      assert(got.records.map(_.id) == id, "each ray returns once, in turn")
+      compare(s"flips run $run", seed, got, want, rays)
+      val r = want.records
+      info(s"${r.count(_.stepLimit)} step limits (limit ${img.p.stepLimit}), ${r.count(_.overflow)} overflows, ${r.count(_.readError)} read errors, " +
+        s"${r.count(_.prim >= 0)} hits of $n rays; ${want.accesses.map(_.length).sum} fetches, ${got.cycles} cycles")
+      // a flagged ray's record names its first flag; an unflagged one keeps the id word as memory holds it, which a
+      // flip may have made negative (RTL and model alike)
+      assert(r.forall(x => !(x.overflow || x.readError || x.stepLimit) ||
+        (x.t == fbits(Inf) && x.prim == (if (x.readError) Hits.ReadError else if (x.stepLimit) Hits.StepLimit else Hits.Overflow))))
+      if (!rtaccel.Regress.full) assert(r.exists(_.stepLimit), "make test's seeds make a loop some rays enter")
+    }
+
+  // the short stack with restart over corrupted images: make test on the short-stack test's circuit (ring 1), one image;
+  // make regress 10 more there and 20 with a ring of 2 on the fitted soup of the random-flip test
+  private def shortSoup = { val i = soupImage(7, 300, PlatformParams(tus = 4, m = 4, mppl = 4), fit = true); i.copy(p = i.p.copy(shortStack = 1)) }
+  for ((ring, images) <- Seq(1 -> (if (rtaccel.Regress.full) 11 else 1)) ++ (if (rtaccel.Regress.full) Seq(2 -> 20) else Nil))
+    test(s"step limit with SHORT_STACK=$ring, a loop and random silent bit flips ($images seeded image(s)): fetches and records (flags included) equal the model's") {
+      val clean = if (ring == 1) shortSoup else { val i = fittedSoup; i.copy(p = i.p.copy(shortStack = ring)) }
+      var limited = 0
+      for (run <- 0 until images) {
+        val seed = 500L + run
+        val img = corrupted(if (run % 2 == 0) TestScenes.withLoop(clean, seed) else clean, seed, flips = 60 + 30 * (run % 4))
+        val rays = soupRays(seed, 150); val id = ids(150, seed)
+        val want = model(img, MemFaults.none, rays, id)
+        val got = rtl(img.p, img, rays, id, seed, index = run % 4)
+        compare(s"ring $ring flips run $run", seed, got, want, rays)
+        limited += want.records.count(_.stepLimit)
+      }
+      info(s"$limited rays ended at the step limit (${clean.p.stepLimit} fetches, or a node below the trail's ${clean.p.treeLevels} levels)")
+      assert(limited > 0)
+    }
 }
