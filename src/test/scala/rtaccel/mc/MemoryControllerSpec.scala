@@ -304,9 +304,11 @@ class MemoryControllerSpec extends McCases {
   runCase("re-read sticky errors MEM_RETRIES times, then deliver them marked (two streams)", dataBits = 256, tris = 300,
     nReqs = 60, errors, reqProb = 0.9, readyProb = 0.6, seed = 28, respBufferBeats = 40, maxCycles = 8000,
     respByPath = true, memRetries = 2, errorSticky = true)
-  runCase("deliver a transient error at once with MEM_RETRIES=0 (the re-read of the same beat is clean)", dataBits = 256,
-    tris = 300, nReqs = 90, errors, reqProb = 0.9, readyProb = 0.6, seed = 29, respBufferBeats = 40, maxCycles = 8000,
-    memRetries = 0, errorSticky = false)
+  // make regress only, as PlatformSpec's MEM_RETRIES=0 case: the flag-at-once path is the re-read logic left out
+  if (rtaccel.Regress.full)
+    runCase("deliver a transient error at once with MEM_RETRIES=0 (the re-read of the same beat is clean)", dataBits = 256,
+      tris = 300, nReqs = 90, errors, reqProb = 0.9, readyProb = 0.6, seed = 29, respBufferBeats = 40, maxCycles = 8000,
+      memRetries = 0, errorSticky = false)
   it should "refuse MEM_RETRIES without response buffers" in {
     val e = intercept[IllegalArgumentException](_root_.circt.stage.ChiselStage.emitCHIRRTL(
       new MemoryController(rtaccel.config.Presets.paper2017.copy(memRetries = 1), AxiParams())))
