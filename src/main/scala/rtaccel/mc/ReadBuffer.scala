@@ -33,12 +33,16 @@ class ReadBuffer(gen: FetchBeat, val size: Int, beatsBits: Int) extends Module {
   private val full = RegInit(VecInit(Seq.fill(size)(false.B))) // the slot holds a beat not yet taken
   private val alloc = RegInit(0.U(slotBits.W))
   private val head = RegInit(0.U(slotBits.W))
+  // the slot after head, kept in a register: a beat's leaving (full(head), the consumer's ready) then selects head's
+  // next value and does not run through head's increment and wrap too (Yosys folds head into the RAM's read port, so
+  // that path ended in the RAM: the MC's routed critical path on ECP5, 9 LUT levels)
+  private val headNext = RegInit((1 % size).U(slotBits.W))
   io.base := alloc
   when(io.alloc) { alloc := wrap(alloc, io.allocBeats) }
 
   io.deq.valid := full(head)
   io.deq.bits := ram(head)
-  when(io.deq.fire) { full(head) := false.B; head := wrap(head, 1.U) }
+  when(io.deq.fire) { full(head) := false.B; head := headNext; headNext := wrap(headNext, 1.U) }
   when(io.write.valid) {
     ram(io.write.bits.slot) := io.write.bits.beat
     full(io.write.bits.slot) := true.B
