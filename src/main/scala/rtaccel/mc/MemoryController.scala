@@ -226,8 +226,9 @@ class BurstSplitter(g: McGeometry, id: Int = 0) extends Module {
   * re-read, issued after later reads, still reaches its path before them. Beats pass on as they land: the beats before
   * a read's first failed one go at once, and its re-read delivers only from that beat on (dropping what was already
   * delivered), so a read that needs no re-read waits for nothing. A DECERR (no memory at that address) is not re-read.
-  * Re-reads go to DRAM before any new read (the arbiter's first choice): the reads in flight, re-reads waiting
-  * included, never grow while one waits, so the re-read queue (mcOutstanding + 2 entries) cannot fill.
+  * Re-reads go to DRAM before any new read (the arbiter's first choice): while one waits no new read is issued, so
+  * the queue holds at most the reads then in the memory-order FIFO (mcOutstanding), the issue slice's two and the one
+  * in its input register: it has mcOutstanding + 4 entries and cannot fill (an assertion checks it).
   * A node bank's MC (NODE_BANKS, rtaccel.cache.hw.NodeBanks): extraTagBits widen the tag by the requesting cluster,
   * and its node path sees line = node id >> nodeLineShift (the id without the bank bits, as a bank indexes its sets).
   */
@@ -352,7 +353,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     }
   }
   // MEM_RETRIES: reads to issue again, ahead of every new read
-  val retryQ = if (retrying) Some(Module(new Queue(new InFlight, maxOutstanding + 2))) else None
+  val retryQ = if (retrying) Some(Module(new Queue(new InFlight, maxOutstanding + 4))) else None
   // with PIPELINE the arbiter's choice passes a register slice (arb.Slice) before the splitter and the memory-order
   // FIFO: their readies end there. After the arbiter, so DRAM order stays the order it chose (one slice, not one
   // per path: two would let a later request overtake an earlier one, which the in-order response mux cannot wait out)
@@ -395,16 +396,23 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
       when(failsNow) { failAt := rBeat }
       failed := Mux(rLast, false.B, failed || failsNow)
     }
-    q.io.enq.valid := io.axi.r.fire && rLast && (failed || failsNow)
-    q.io.enq.bits := rHead
-    q.io.enq.bits.attempt.get := rHead.attempt.get + 1.U
-    q.io.enq.bits.good.get := Mux(failed, failAt, rBeat)
-    (isNew && !fails, q.io.enq.ready)
+    val push = Wire(Valid(new InFlight))
+    push.valid := io.axi.r.fire && rLast && (failed || failsNow)
+    push.bits := rHead
+    push.bits.attempt.get := rHead.attempt.get + 1.U
+    push.bits.good.get := Mux(failed, failAt, rBeat)
+    // through a register: the memory-order FIFO's read (its pointer, its RAM) does not run into the re-read queue's
+    // RAM in the same cycle (the MC's routed critical path on ECP5). The queue never refuses it (see above)
+    val pushed = RegNext(push, 0.U.asTypeOf(push))
+    q.io.enq.valid := pushed.valid
+    q.io.enq.bits := pushed.bits
+    when(pushed.valid) { assert(q.io.enq.ready, "MemoryController: the re-read queue filled") }
+    isNew && !fails
   }
-  val keep = retry.fold(true.B)(_._1)
+  val keep = retry.getOrElse(true.B)
   val rPathReady = bufs.head match {
     case None => VecInit(paths.map(_.io.memResp.ready))(rHead.path)
-    case Some(_) => retry.fold(true.B)(_._2) // a beat always has its slot (credits); a failed read needs the queue
+    case Some(_) => true.B // a beat always has its slot (credits), and a failed read a place in the re-read queue
   }
   io.axi.r.ready := memOrder.io.deq.valid && rPathReady
   for (((path, b), i) <- paths.zip(bufs).zipWithIndex) {
@@ -460,5 +468,4 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   io.counters.retries := counter(1.U, retryQ.fold(false.B)(_.io.enq.fire))
 
   when(io.axi.r.valid) { assert(memOrder.io.deq.valid, "MemoryController: an R beat with no read outstanding") }
-  for (q <- retryQ) when(io.axi.r.valid && memOrder.io.deq.valid) { assert(q.io.enq.ready, "MemoryController: the re-read queue filled") }
 }
