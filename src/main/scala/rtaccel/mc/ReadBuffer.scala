@@ -12,7 +12,7 @@ import chisel3.util._
   * reads in the order it made them. A slot is written only while empty (the MC drops the beats a re-read repeats).
   */
 class ReadBuffer(gen: FetchBeat, val size: Int, beatsBits: Int) extends Module {
-  require(size >= 1, "a response buffer needs at least one slot")
+  require(size >= 2, "a response buffer needs at least two slots")
   val slotBits: Int = math.max(1, log2Ceil(size))
   val io = IO(new Bundle {
     /** a read of `allocBeats` beats is granted this cycle: it gets the slots from `base` on */
@@ -36,13 +36,19 @@ class ReadBuffer(gen: FetchBeat, val size: Int, beatsBits: Int) extends Module {
   // the slot after head, kept in a register: a beat's leaving (full(head), the consumer's ready) then selects head's
   // next value and does not run through head's increment and wrap too (Yosys folds head into the RAM's read port, so
   // that path ended in the RAM: the MC's routed critical path on ECP5, 9 LUT levels)
-  private val headNext = RegInit((1 % size).U(slotBits.W))
+  private val headNext = RegInit(1.U(slotBits.W))
+  // whether head's slot holds a beat (full(head)), kept in a register for the same reason: the beat's leaving then
+  // waits on no 1-of-size select, so head's next value is two LUT levels from registers
+  private val headFull = RegInit(false.B)
+  private def lands(slot: UInt): Bool = io.write.valid && io.write.bits.slot === slot
   io.base := alloc
   when(io.alloc) { alloc := wrap(alloc, io.allocBeats) }
 
-  io.deq.valid := full(head)
+  io.deq.valid := headFull
   io.deq.bits := ram(head)
+  headFull := Mux(io.deq.fire, full(headNext) || lands(headNext), headFull || lands(head))
   when(io.deq.fire) { full(head) := false.B; head := headNext; headNext := wrap(headNext, 1.U) }
+  assert(headFull === full(head), "ReadBuffer: the head's full bit and its register disagree")
   when(io.write.valid) {
     ram(io.write.bits.slot) := io.write.bits.beat
     full(io.write.bits.slot) := true.B
