@@ -318,6 +318,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   class InFlight extends Bundle {
     val path = UInt(1.W)
     val beats = UInt(g.beatsBits.W)
+    val last = UInt(g.beatsBits.W) // beats - 1, the last beat's index: the R side compares, it does not subtract
     val base = if (buffered) Some(UInt(log2Ceil(respBufferBeats).max(1).W)) else None
     val addr = if (retrying) Some(UInt(axi.addrBits.W)) else None
     val attempt = if (retrying) Some(UInt(attemptBits.W)) else None
@@ -359,7 +360,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   // per path: two would let a later request overtake an earlier one, which the in-order response mux cannot wait out)
   val chosen = Wire(Decoupled(new Bundle { val req = g.memReq; val read = new InFlight }))
   val fresh = Wire(new InFlight)
-  fresh.path := arb.io.chosen; fresh.beats := arb.io.out.bits.beats
+  fresh.path := arb.io.chosen; fresh.beats := arb.io.out.bits.beats; fresh.last := arb.io.out.bits.beats - 1.U
   for (b <- fresh.base) b := VecInit(bufs.map(_.get.io.base))(arb.io.chosen)
   for (a <- fresh.addr) a := arb.io.out.bits.addr
   for (a <- fresh.attempt) a := 0.U
@@ -383,14 +384,19 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
 
   val rBeat = RegInit(0.U(g.beatsBits.W))
   val rHead = memOrder.io.deq.bits
-  val rLast = rBeat === rHead.beats - 1.U
+  val rLast = rBeat === rHead.last
   val rErr = io.axi.r.bits.resp =/= 0.U // SLVERR or DECERR
   // MEM_RETRIES: an SLVERR before the last attempt fails this attempt; its beats from the first failed one on are
   // dropped and the read goes to the re-read queue (beats before `good` were delivered by an earlier attempt)
   val retry = retryQ.map { q =>
     val failed = RegInit(false.B); val failAt = Reg(UInt(g.beatsBits.W))
     val fails = io.axi.r.bits.resp === 2.U && rHead.attempt.get =/= p.memRetries.U
-    val isNew = rBeat >= rHead.good.get && !failed
+    // whether this beat is at or past `good`, from a register but at a read's first beat: equalities only, the
+    // memory-order FIFO's read reaches no carry chain
+    val reachedReg = RegInit(false.B)
+    val reached = Mux(rBeat === 0.U, rHead.good.get === 0.U, reachedReg)
+    when(io.axi.r.fire) { reachedReg := !rLast && (reached || rBeat + 1.U === rHead.good.get) }
+    val isNew = reached && !failed
     val failsNow = isNew && fails
     when(io.axi.r.fire) {
       when(failsNow) { failAt := rBeat }

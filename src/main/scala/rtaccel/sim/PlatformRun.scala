@@ -232,8 +232,7 @@ object PlatformRun {
       // the lookups the caches turned into refetches of a poisoned line, per MC
       val refetched = if (!cached) Nil else Seq.tabulate(p.memControllers) { c =>
         val n = dut.io.refetchCount(c).peek().litValue.toInt
-        if (n > SimSetup.refetchLogEntries)
-          throw new InputError(s"the caches refetched $n poisoned lines, more than the simulator logs (${SimSetup.refetchLogEntries}); lower MEM_ERROR_RATE")
+        if (n > logCap) throw new InputError(s"the caches refetched $n poisoned lines, more than the ${logCap} lookups the simulator logs")
         (0 until n).map { k => dut.io.readIdx.poke(k.U); dut.io.refetchData(c).peek().litValue.toInt }.toArray
       }
       val tLog = System.nanoTime()

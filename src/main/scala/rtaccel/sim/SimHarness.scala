@@ -40,9 +40,6 @@ object SimSetup {
   val minRays: Int = 1 << 17
   val minImageBytes: Long = 64L << 20
   val minLogEntries: Int = 1 << 21
-  /** Refetches of poisoned cache lines logged per MC (one per errored fill a later lookup met, and its repeats): a run
-    * that makes more is refused rather than compared on a partial log. */
-  val refetchLogEntries: Int = 1 << 14
   /** The capacity of a build that must hold `n` entries: a power of two, at least `floor`. */
   def capacity(n: Long, floor: Long): Int = pow2(math.max(n, floor))
 }
@@ -126,7 +123,9 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
     val mcs = top.mcs ++ top.nodeBanks.toSeq.flatMap(_.banks)
     for ((mc, m) <- mcs.zipWithIndex) {
       val count = RegInit(0.U(32.W))
-      val log = Mem(SimSetup.refetchLogEntries, UInt(32.W))
+      // as deep as the access log: a refetch is one of the lookups it holds (a sticky error on a line every ray reads
+      // makes one per lookup)
+      val log = Mem(s.accessLogCapacity, UInt(32.W))
       // each cache path's refetches this cycle (at most one per path), entered in path order
       val events = mc.paths.zipWithIndex.collect { case (c: rtaccel.cache.hw.CachePath, i) =>
         val (fire, forced) = (BoringUtils.bore(c.eFire), BoringUtils.bore(c.eForced))
@@ -136,12 +135,12 @@ class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
       }
       var at = count
       for ((ev, word) <- events) {
-        when(ev && at < SimSetup.refetchLogEntries.U) { log.write(at(log2Ceil(SimSetup.refetchLogEntries) - 1, 0), word) }
+        when(ev && at < s.accessLogCapacity.U) { log.write(at(log2Ceil(s.accessLogCapacity) - 1, 0), word) }
         at = at + ev.asUInt
       }
       count := at
       io.refetchCount(m) := count
-      io.refetchData(m) := log(io.readIdx(log2Ceil(SimSetup.refetchLogEntries) - 1, 0))
+      io.refetchData(m) := log(io.readIdx(log2Ceil(s.accessLogCapacity) - 1, 0))
     }
   }
   // every cluster's log holds ALL accesses (accessLogCapacity, sized for the whole run), not a 1/IUS share: the
