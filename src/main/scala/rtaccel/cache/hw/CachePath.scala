@@ -141,7 +141,12 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
     def clear(clearing: Bool, clearSet: UInt): Unit = when(clearing && clearSet < sets.U) {
       wEn := true.B; clearAll := true.B; wSet := clearSet(setBits - 1, 0)
     }
-    def mark(en: Bool, set: UInt, way: UInt, bad: Bool): Unit = when(en) { wEn := true.B; wSet := set; wWay := way; wBit := bad }
+    /** through a register: the ticket queue's read and the fill's last-beat compare do not run into the marks' RAM (a
+      * lookup may then see a mark a cycle later, which the simulation's log of refetches records as it falls) */
+    def mark(en: Bool, set: UInt, way: UInt, bad: Bool): Unit = {
+      val (e, s, w, b) = (RegNext(en, false.B), RegNext(set), RegNext(way), RegNext(bad))
+      when(e) { wEn := true.B; wSet := s; wWay := w; wBit := b }
+    }
   }
   // one per tag array (bf: one per line), so the data line of (set, way) is set * ways + way after the arrays before
   val poison: Seq[PoisonMarks] =
