@@ -14,8 +14,9 @@ class FetchReq(tagBits: Int = 0) extends Bundle {
 }
 
 /** One bus-width beat of fetched data; `last` marks the final beat of its request; `err` = the memory
-  * answered it with an error (AXI RRESP other than OKAY): its data must not be used, and a cache that keeps
-  * the beat keeps the error with it (poison), so that every later reader sees it too.
+  * answered it with an error (AXI RRESP other than OKAY, after MEM_RETRIES re-reads): its data must not be used. A
+  * cache stores the error bit with the beat for the lookups queued behind that fill, and marks the line so that a
+  * later lookup reads it again (rtaccel.cache.hw.CachePath, PoisonMarks).
   * RESP_ORDER=tagged: `tag` (tagBits > 0) is the tag of the request the beat answers.
   */
 class FetchBeat(dataBits: Int, tagBits: Int = 0) extends Bundle {

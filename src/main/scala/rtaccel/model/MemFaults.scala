@@ -3,7 +3,7 @@ package rtaccel.model
 /** Poisoned DRAM beats: the simulation's memory-error injection (MEM_ERROR_RATE), known to the model
   * so that the RTL's fault handling can be checked ray by ray. A beat is poisoned by its index in memory (byte
   * address / beat bytes), not by when it is read. With MEM_ERROR_MODE=sticky, like a bad DRAM cell, every read of it
-  * fails, through a cache too (a cached beat keeps its error bit), so the affected rays do not depend on timing;
+  * fails, a cache's refetch too, so the affected rays do not depend on timing;
   * transient, only its first read fails (MemoryController re-reads it with MEM_RETRIES).
   * `threshold` of 65536: each beat is poisoned with probability threshold / 65536 (0 = no errors).
   * The hash is simple 32-bit integer arithmetic so that the DRAM model computes it identically in hardware

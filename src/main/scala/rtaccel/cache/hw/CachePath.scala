@@ -180,7 +180,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
     when(clearing) { clearIdx := clearIdx + 1.U }
     ready := !clearing
     val poisoned = poison.zip(arrays).map { case (pm, a) => pm.read(a.setOf(lookLine)) }
-    for ((pm, a) <- poison.zip(arrays)) pm.clear(clearing, clearIdx)
+    poison.foreach(_.clear(clearing, clearIdx))
     if (!isHybrid) {
       hit := ds.head.hit; fill := ds.head.fill; dataLine := mainIdx
       forced := ds.head.hit && poisoned.head(ds.head.way)
