@@ -10,24 +10,24 @@ object Analyze {
   def main0(a: Args): Unit = {
     val out = a.path("out")
     val (scene, rays, _) = Cli.inputs(a)
-    val base = Cli.params(a)
+    val req = Cli.request(a); val base = req.base
     if (base.primPacked) throw new rtaccel.io.InputError("PRIM_FORMAT=packed: make analyze counts primitive slots per access " +
       "(the paper's Fig 4); its packed bytes come from make trace or make cachesim")
     val mppls = a.get("mppls", "1,2,4,8,16").split(",").map(_.trim.toInt).toSeq
     val label = a.get("scene-label", a.need("tris"))
     val levelMppl = base.mppl
     val results = mppls.map { k =>
-      val p = base.copy(mppl = k)
       System.err.println(s"[analyze] MPPL=$k: building and tracing ${rays.count} rays")
-      val b = Cli.build(scene, rays, p, a) // CONFIG=<preset> is checked against the scene, CONFIG=fit fitted
+      val b = Cli.build(scene, rays, req.map(_.copy(mppl = k))) // CONFIG=<preset> is checked against the scene, CONFIG=fit fitted
       val c = Analysis.run(b.scene, b.bvh, b.params, rays)
-      (k, b.bvh, c, Analysis.mpplRow(b.params, rays, b.bvh, c))
+      (k, b, c, Analysis.mpplRow(b.params, rays, b.bvh, c))
     }
-    val (_, lbvh, lc, _) = results.find(_._1 == levelMppl).getOrElse {
-      val b = Cli.build(scene, rays, base, a); (levelMppl, b.bvh, Analysis.run(b.scene, b.bvh, b.params, rays), null)
+    val (_, lb, lc, _) = results.find(_._1 == levelMppl).getOrElse {
+      val b = Cli.build(scene, rays, req); (levelMppl, b, Analysis.run(b.scene, b.bvh, b.params, rays), null)
     }
+    val lbvh = lb.bvh
     // what CONFIG made of the scene (the preset, or fit), as the builds above named it: no extra BVH build
-    val cfgName = if (Cli.fitRequested(a)) rtaccel.config.Fit.fitTo(base, lbvh).name else base.name
+    val cfgName = lb.params.name
     val prov = s"# scene=$label triangles=${scene.triangles} config=$cfgName M=${base.m} rays=${rays.count} " +
       s"node_access_bytes=${base.nodeAccessBytes} prim_access_bytes=${base.primAccessBytes} rtaccel=${Cli.version}\n"
     val bw = new StringBuilder(prov)
@@ -43,7 +43,7 @@ object Analyze {
     Cli.writeText(out.resolve("levels.csv"), lv.toString)
     val top4 = levelRows.take(4)
     val summary = ujson.Obj(
-      "scene" -> label, "rays" -> rays.count, "m" -> base.m, "box_format" -> base.boxFormat.name, "numerics" -> Numerics.json(base), "short_stack" -> base.shortStack,
+      "scene" -> label, "rays" -> rays.count, "m" -> base.m, "box_format" -> lb.params.boxFormat.name, "numerics" -> Numerics.json(lb.params), "short_stack" -> base.shortStack,
       "bytes_per_ray" -> ujson.Obj.from(results.map { case (k, _, _, r) =>
         k.toString -> ujson.Obj("node" -> r.nodeBytesPerRay, "prim" -> r.primBytesPerRay, "total" -> r.totalBytesPerRay) }),
       "levels_for_mppl" -> levelMppl,

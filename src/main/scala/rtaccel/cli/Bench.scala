@@ -15,12 +15,12 @@ object Bench {
 
   def main0(a: Args): Unit = {
     val (scene, rays, _) = Cli.inputs(a)
-    val p = Cli.params(a)
+    val req = Cli.request(a); val p = req.base // the tree depends on M, MPPL and the access sizes only
     val repeat = a.int("repeat", 5)
     val builds = (0 until repeat).map { _ =>
       val t0 = System.nanoTime(); val bvh = Mbvh.build(scene, p); ((System.nanoTime() - t0) / 1e9, bvh)
     }
-    val b = Cli.build(scene, rays, p, a) // the configuration CONFIG names, fitted or checked
+    val b = Cli.build(scene, rays, req) // the configuration CONFIG names, fitted or checked
     val tr = new Traversal(MemoryImage.pack(b.bvh, b.scene, b.params))
     tr.traceAll(rays) // JIT warm-up, not timed
     val cpu = java.lang.management.ManagementFactory.getThreadMXBean

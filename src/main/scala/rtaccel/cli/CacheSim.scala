@@ -17,11 +17,11 @@ object CacheSim {
   def main(args: Array[String]): Unit = Cli.run(args, Flags.cacheSim)(main0)
 
   def main0(a: Args): Unit = {
-    val p0 = Cli.params(a) // refuses bad cache values before the scene is loaded
+    val req = Cli.request(a) // refuses bad cache values before the scene is loaded
     val tLoad = System.nanoTime()
     val (scene, rays, _) = Cli.inputs(a)
     val loadS = (System.nanoTime() - tLoad) / 1e9 // ~0 when Serve kept the scene and rays
-    val b = Cli.build(scene, rays, p0, a)
+    val b = Cli.build(scene, rays, req)
     val p = b.params
     val tus = p.tus // the preset's TUs unless TUS= is given (paper2017: 32); TUS=1 replays one TU's order
     val (node, prim) = (p.nodeCache, p.primCache)

@@ -1,7 +1,7 @@
 package rtaccel.cli
 
 import java.nio.file.{Path, Paths}
-import rtaccel.config.{BoxRange, CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Pipelining, Presets, RespOrder, TriTest}
+import rtaccel.config.{BoxRange, CacheParams, CachePolicy, Fit, Numerics, PlatformParams, Pipelining, Presets, RequestedParams, RespOrder, TriTest}
 import rtaccel.bvh.Mbvh
 import rtaccel.io.{InputError, Npy}
 import rtaccel.scene.{Normalize, Rays, Scene}
@@ -29,13 +29,13 @@ object Cli {
     if (code != 0) sys.exit(code)
   }
 
-  /** A preset is the whole platform it names, caches included (paper2017: its 2^13-entry DM node cache);
+  /** What the command line asks for (config.RequestedParams). A preset is the whole platform it names, caches included (paper2017: its 2^13-entry DM node cache);
     * every flag given overrides one field (--node-cache 0 removes the cache). CONFIG=<preset> keeps the
     * preset's fixed widths and refuses scenes that exceed them; CONFIG=fit (default) starts from paper2017
     * and fits field widths and stack depth to the scene. An explicit --stack-depth (STACK=) is kept even
     * below what the scene needs: rays that need more are flagged overflow (see Cli.build).
     */
-  def params(a: Args): PlatformParams = {
+  def request(a: Args): RequestedParams = {
     for (k <- rtaccel.config.Knobs.all; v <- a.opt(k.flag)) rtaccel.config.Knobs.check(k, v)
     val cfg = a.get("config", "fit")
     val preset = if (cfg == "fit") Presets.paper2017.copy(name = "fit") else Presets.byName(cfg)
@@ -62,25 +62,37 @@ object Cli {
       primAccessBytes = a.int("prim-bytes", base.primAccessBytes),
       stackDepth = a.int("stack-depth", base.stackDepth), shortStack = a.int("short-stack", base.shortStack),
       maxSteps = a.opt("max-steps").map(_ => a.int("max-steps", 0)).orElse(base.maxSteps),
-      // m<M>: M fraction bits, the exponent fitted to the scene in build()
-      boxFormat = a.opt("box-format").map(v => BoxRange.fitRequest(v).fold(rtaccel.fp.FpFormat.parse(v))(rtaccel.fp.FpFormat(8, _)))
-        .getOrElse(base.boxFormat),
+      // m<M> (boxFit below): the exponent fitted to the scene in build()
+      boxFormat = a.opt("box-format").filter(BoxRange.fitRequest(_).isEmpty).map(rtaccel.fp.FpFormat.parse).getOrElse(base.boxFormat),
       triTest = a.opt("tri-test").map(TriTest.parse).getOrElse(base.triTest),
       triFormat = a.opt("tri-format").map(Numerics.parseTriFormat).getOrElse(base.triFormat),
       // fit: the narrowest quantization the scene needs, chosen in build()
       nodeQuantBits = a.opt("node-format").filter(_ != "fit").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
       primPacked = a.opt("prim-format").map(Numerics.parsePrimFormat).getOrElse(base.primPacked),
       nodeCache = cacheArg(a, "node", base.nodeCache), primCache = cacheArg(a, "prim", base.primCache))
-    if (!fmax) p
+    val req = RequestedParams(p, fitWidths = cfg == "fit", boxFit = a.opt("box-format").flatMap(BoxRange.fitRequest),
+      nodeFit = a.opt("node-format").contains("fit"), stackGiven = a.opt("stack-depth").nonEmpty)
+    if (!fmax) req
     else {
       if (cfg == "fit") throw new InputError("CLOCK_MHZ=fmax needs CONFIG=<preset>: a fitted configuration's circuit depends on the scene, " +
         "so no routed or synthesized clock of it can be cached; give CONFIG=paper2017 (or another preset) or CLOCK_MHZ=<MHz>")
+      // the clock measured belongs to one circuit: a format the scene fits is not known yet
+      val q = req.withoutScene("CLOCK_MHZ=fmax")
       val b = board.getOrElse(rtaccel.area.Boards.byName("xc5vlx330t", a.opt("catalog").map(Paths.get(_)).getOrElse(rtaccel.area.Boards.defaultPath)))
-      val (f, src) = rtaccel.area.ClockSource.resolve(p, b, makeArgs(a))
+      val (f, src) = rtaccel.area.ClockSource.resolve(q, b, makeArgs(a))
       Console.err.println(f"[clock] CLOCK_MHZ=fmax: $f%.1f MHz ($src, ${b.name})")
       // the circuit stays the one built for the target clock (PIPELINE=auto's budget), now timed at its measured clock
-      p.copy(clockMhz = f, clockSource = src, pipelineMhz = Some(p.pipelineMhz.getOrElse(p.clockMhz)))
+      req.map(_ => q.copy(clockMhz = f, clockSource = src, pipelineMhz = Some(q.pipelineMhz.getOrElse(q.clockMhz))))
     }
+  }
+
+  /** The platform of a preset as the command line asks for it, for a command that builds a circuit without a scene
+    * (`what` names it: make verilog, area, timing, max-tus, the cost fit): refused when a part of it needs a scene
+    * (RequestedParams.withoutScene) or when the RTL cannot build its caches. */
+  def preset(a: Args, what: String): PlatformParams = {
+    val p = request(a).withoutScene(what)
+    rtaccel.cache.hw.CachePath.validate(p)
+    p
   }
 
   /** The platform knobs of `a` as the make variables that set them (CONFIG first; BOARD and CLOCK_MHZ left out),
@@ -129,20 +141,17 @@ object Cli {
     Built(scene, p, bvh, secs)
   }
 
-  /** build() with CONFIG, STACK, BOX_FORMAT and NODE_FORMAT as the command line gives them; the box format is
-    * fitted (BOX_FORMAT=m<M>) or checked against the depth of the scene along these rays (config.BoxRange), and
-    * NODE_FORMAT=fit picks the narrowest quantization (model.FormatFit).
+  /** The request resolved on a scene and its rays: the tree built, the widths fitted (CONFIG=fit) or checked, the box
+    * format fitted (BOX_FORMAT=m<M>) or checked against the depth of the scene along these rays (config.BoxRange), and
+    * NODE_FORMAT=fit's narrowest quantization (model.FormatFit).
     */
-  def build(scene: Scene, rays: Rays, p0: PlatformParams, a: Args): Built = {
-    val b = build(scene, p0, fitRequested(a), stackArg(a))
+  def build(scene: Scene, rays: Rays, req: RequestedParams): Built = {
+    val b = build(scene, req.unfitted, req.fitWidths, if (req.stackGiven) Some(req.base.stackDepth) else None)
     val depth = Memo("box-depth", (new Memo.Id(scene), new Memo.Id(rays)))(BoxRange.depth(scene, rays))
     def measure(m: Int, d: Double) = rtaccel.model.FormatFit.boxExponent(rtaccel.bvh.MemoryImage.pack(b.bvh, b.scene, b.params), rays, m, d)
-    val boxed = BoxRange.fit(b.params, a.opt("box-format"), depth, scene.name, measure)
-    b.copy(params = if (a.opt("node-format").contains("fit")) rtaccel.model.FormatFit.nodeFormat(b.bvh, b.scene, boxed, rays) else boxed)
+    val boxed = BoxRange.fit(b.params, req.boxFit, depth, scene.name, measure)
+    b.copy(params = if (req.nodeFit) rtaccel.model.FormatFit.nodeFormat(b.bvh, b.scene, boxed, rays) else boxed)
   }
-
-  def fitRequested(a: Args): Boolean = a.get("config", "fit") == "fit"
-  def stackArg(a: Args): Option[Int] = a.opt("stack-depth").map(_ => a.int("stack-depth", 0))
 
   /** The scene and rays as the host driver uploads them: scaled by one power of two (see Normalize). */
   def inputs(a: Args): (Scene, Rays, Int) = {

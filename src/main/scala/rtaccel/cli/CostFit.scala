@@ -25,7 +25,7 @@ object CostFit {
       val argv = e("flags").arr.map(_.str).toArray
       val a = try Flags.parse(argv, Flags.area) catch { case x: InputError => throw new InputError(s"$path: $key '$name': ${x.getMessage}") }
       // the fit is of the fixed stages; the registers PIPELINE adds are counted at elaboration (CostModel.pipelineFf)
-      val p = EmitVerilog.preset(a, s"$path: $key '$name'").copy(pipelining = rtaccel.config.Pipelining.Fixed)
+      val p = Cli.preset(a, s"$path: $key '$name'").copy(pipelining = rtaccel.config.Pipelining.Fixed)
       Point(name, p, a.get("unit", "RtAccelTop"), e.obj.get("family").map(_.str).getOrElse(family))
     }
 

@@ -2,7 +2,6 @@ package rtaccel.cli
 
 import rtaccel.config.Numerics
 import java.nio.file.{Files, Paths}
-import rtaccel.config.Presets
 import rtaccel.top.RtAccelTop
 
 /** make verilog: SystemVerilog of the board top for a preset (optionally with TUS/M/MPPL overrides), one
@@ -12,19 +11,6 @@ object EmitVerilog {
   val LoweringOptions = "--lowering-options=disallowLocalVariables,disallowPackedArrays"
 
   def main(args: Array[String]): Unit = Cli.run(args, Flags.verilog)(main0)
-
-  /** The preset CONFIG names with the flags' overrides; `fit` is refused (a fitted config needs a scene). */
-  def preset(a: Args, what: String): rtaccel.config.PlatformParams = {
-    val cfg = a.need("config")
-    if (cfg == "fit") throw new rtaccel.io.InputError(s"$what needs a preset (CONFIG=paper2017|paper2017-lrp|small); fitted configs come from a scene via make simulate")
-    a.opt("box-format").flatMap(rtaccel.config.BoxRange.fitRequest).foreach(m => throw new rtaccel.io.InputError(
-      s"BOX_FORMAT=m$m fits the exponent to a scene's rays, which $what does not read; give the format as e<E>m$m (make trace prints the fitted one under numerics)"))
-    if (a.opt("node-format").contains("fit")) throw new rtaccel.io.InputError(
-      s"NODE_FORMAT=fit picks the quantization from a scene's rays, which $what does not read; give it as q<bits> or full (make trace prints the fitted one under numerics)")
-    val p = Cli.params(a).copy(name = cfg)
-    rtaccel.cache.hw.CachePath.validate(p)
-    p
-  }
 
   /** SystemVerilog of the board top of `p`, one file per module in `out` (old .sv files removed); the files.
     * The last few circuits' text is kept in memory: CLOCK_MHZ=fmax, make timing and make area each emit the
@@ -69,7 +55,7 @@ object EmitVerilog {
   }
 
   def main0(a: Args): Unit = {
-    val p = preset(a, "make verilog")
+    val p = Cli.preset(a, "make verilog")
     val out = Paths.get(a.get("out", s"build/${p.name}"))
     val files = emit(p, out)
     // the host's view of this build: register map, counters and the configuration words it reads back

@@ -16,7 +16,7 @@ object Flags {
     f("tris", "triangle file (N x 9 float32 .npy, from tools/tris)"),
     f("rays", "rays.npy (N x 8 float32)"),
     f("scene-label", "scene name recorded in outputs"))
-  /** Knobs of PlatformParams, from the registry (config.Knobs: Cli.params checks each value given against its
+  /** Knobs of PlatformParams, from the registry (config.Knobs: Cli.request checks each value given against its
     * domain; a preset's value is kept unless one is given): the tree, arithmetic, platform and memory knobs ... */
   private def knob(k: rtaccel.config.Knobs.Knob) = f(k.flag, s"${k.help} (${k.make}=; ${k.domain.rule})")
   private val cacheFlags = Set("node-cache", "node-ways", "node-policy", "prim-cache", "prim-ways", "prim-policy", "max-level")

@@ -15,7 +15,7 @@ object MaxTus {
   def main0(a: Args): Unit = {
     val t0 = System.nanoTime()
     val board = Boards.requireXilinx(Boards.byName(a.get("board", "xc5vlx330t"), a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath)), "make max-tus")
-    val p0 = EmitVerilog.preset(a, "make max-tus")
+    val p0 = Cli.preset(a, "make max-tus")
     val model = CostModel.load(a.opt("cost-model").map(Paths.get(_)).getOrElse(CostModel.defaultPath))
     val hi = a.int("max", 1024)
     if (hi < 1 || hi > 1024) throw new InputError(s"--max must be 1..1024 (got $hi)")

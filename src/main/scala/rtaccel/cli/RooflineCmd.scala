@@ -50,13 +50,13 @@ object RooflineCmd {
   def main(args: Array[String]): Unit = Cli.run(args, Flags.roofline) { a =>
     val out = a.path("out")
     val (scene, rays, e) = Cli.inputs(a)
-    val base = Cli.params(a)
+    val req = Cli.request(a); val base = req.base
     val label = a.get("scene-label", a.need("tris"))
     val list = grid(tusList(a.get("tus-list", "")) match { case Seq() => Seq(base.tus); case l => l },
       tusList(a.get("ius-list", ""), "ROOFLINE_IUS", "IU") match { case Seq() => Seq(base.ius); case l => l })
     val build = a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named)
     val points = list.zipWithIndex.map { case ((t, k), i) =>
-      val b = Cli.build(scene, rays, base.copy(tus = t, ius = k), a)
+      val b = Cli.build(scene, rays, req.map(_.copy(tus = t, ius = k)))
       System.err.println(s"[roofline] $label: TUS=$t IUS=$k (${i + 1} of ${list.length}), ${rays.count} rays")
       val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(label, scaleExp = e, build = build))
       // a failed point stops the sweep before any CSV exists, so nothing downstream plots it

@@ -45,7 +45,7 @@ object Simulate {
 
   def run(a: Args): Outcome = {
     val (scene, rays, scaleExp) = Cli.inputs(a)
-    val b = Cli.build(scene, rays, Cli.params(a), a)
+    val b = Cli.build(scene, rays, Cli.request(a))
     PlatformRun.run(b, rays, SimOptions(a.get("scene-label", a.need("tris")), a.int("mem-jitter", 0), a.int("host-stall", 0),
       a.int("seed", 1), a.get("work", "build/sim"), a.opt("max-cycles").map(_.toLong), scaleExp, a.double("mem-error-rate", 0.0), wavesArg(a),
       a.opt("sim-build").map(rtaccel.sim.VerilatorBuild.named), a.get("mem-error-mode", rtaccel.model.MemFaults.Transient)))

@@ -22,17 +22,17 @@ object SweepTus {
     val (scene, rays, e) = Cli.inputs(a)
     val tusList = a.get("tus-list", "1,2,4,8,16,32").split(",").map(s => s.trim.toIntOption.getOrElse(
       throw new InputError(s"--tus-list must be integers (got '$s')"))).toSeq
-    val base = Cli.params(a)
+    val req = Cli.request(a)
     val label = a.get("scene-label", a.need("tris"))
     val rows = tusList.map { t =>
-      val b = Cli.build(scene, rays, base.copy(tus = t), a)
+      val b = Cli.build(scene, rays, req.map(_.copy(tus = t)))
       System.err.println(s"[sweep] $label: TUs=$t")
       val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(label, scaleExp = e))
       // a failed point stops the sweep before any CSV exists, so nothing downstream plots it
       if (!o.ok) { println(ujson.write(o.json)); throw new CheckFailed(o.failures.map(f => s"TUS=$t $f")) }
       o.json
     }
-    val p = base
+    val p = req.base
     val sb = new StringBuilder(s"# scene=$label triangles=${scene.triangles} rays=${rays.count} config=${p.name} M=${p.m} " +
       s"MPPL=${p.mppl} clock_mhz=${p.clockMhz} mem_bytes_per_s=${p.memory.bytesPerSecond} sustained=${p.memory.sustainedEfficiency} " +
       s"node_cache=${desc(p.nodeCache)} prim_cache=${desc(p.primCache)} rtaccel=${Cli.version}\n")

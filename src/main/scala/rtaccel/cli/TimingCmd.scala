@@ -25,7 +25,7 @@ object TimingCmd {
     val grades = if (part.device.startsWith("um5g")) Set(8) else Set(6, 7, 8)
     if (!grades(speed)) throw new InputError(s"SPEED=$speed: ${board.name} (${board.part}) comes in speed grade " +
       s"${grades.toSeq.sorted.mkString(", ")} only${if (grades.size == 1) " (nextpnr has no other for the 5G parts)" else ""}")
-    val p = EmitVerilog.preset(a, "make timing")
+    val p = Cli.preset(a, "make timing")
     val unit = a.get("unit", "RtAccelTop")
     // the clock to meet: CLOCK_MHZ (a number, or fmax: a measured one) if given, else the board's
     val target = if (a.opt("clock-mhz").isDefined) p.clockMhz else board.clockMhz

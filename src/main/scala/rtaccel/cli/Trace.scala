@@ -12,7 +12,7 @@ object Trace {
   def main0(a: Args): Unit = {
     val out = a.path("out")
     val (scene, rays, scaleExp) = Cli.inputs(a)
-    val b = Cli.build(scene, rays, Cli.params(a), a)
+    val b = Cli.build(scene, rays, Cli.request(a))
     val img = MemoryImage.pack(b.bvh, b.scene, b.params)
     val rec = new AccessRecorder; val st = new RayStats
     val t0 = System.nanoTime()

@@ -67,12 +67,12 @@ object BoxRange {
     far
   }
 
-  /** `p` with its box format fitted (BOX_FORMAT=m<M>: `measure` picks among the widths that represent the
+  /** `p` with its box format fitted (BOX_FORMAT=m<M>, `fitBits` = M: `measure` picks among the widths that represent the
     * scene, narrowest first) or checked against the scene's depth.
     */
-  def fit(p: PlatformParams, request: Option[String], depth: Double, sceneName: String,
+  def fit(p: PlatformParams, fitBits: Option[Int], depth: Double, sceneName: String,
           measure: (Int, Double) => FpFormat = (m, d) => (3 to 8).map(FpFormat(_, m)).find(represents(_, d)).get): PlatformParams =
-    request.flatMap(fitRequest) match {
+    fitBits match {
       case Some(m) =>
         if (!represents(FpFormat(8, m), depth)) throw new InputError(
           f"BOX_FORMAT=m$m: no exponent width of 3..8 bits represents scene '$sceneName' (its rays reach t = $depth%.3g); " +

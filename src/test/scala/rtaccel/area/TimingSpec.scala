@@ -107,7 +107,7 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
   }
 
   test("clock_source: board by default and with BOARD, given with CLOCK_MHZ; CLOCK_MHZ=fmax on a fitted config is refused") {
-    def params(kv: (String, String)*) = Cli.params(Args(kv.toMap))
+    def params(kv: (String, String)*) = Cli.request(Args(kv.toMap)).base
     assert(params("config" -> "small").clockSource == "board" && params("config" -> "small").clockMhz == 150)
     assert(params("config" -> "small", "board" -> "ecp5-85").clockSource == "board")
     val g = params("config" -> "small", "clock-mhz" -> "123")
@@ -119,7 +119,7 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
 
   test("CLOCK_MHZ=fmax: refused with the make command when nothing is cached, the routed clock (ECP5) or the proxy (Xilinx) when it is") {
     assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
-    val p = EmitVerilog.preset(Args(Map("config" -> "small", "tus" -> "1")), "test")
+    val p = Cli.preset(Args(Map("config" -> "small", "tus" -> "1")), "test")
     val board = Boards.byName("ecp5-85")
     val root = dir.resolve("fmax-cache")
     val e = intercept[InputError](ClockSource.resolve(p, board, "CONFIG=small TUS=1", root, root))

@@ -35,17 +35,17 @@ class BoxRangeSpec extends AnyFunSuite {
   test("BOX_FORMAT=m<M> fits the fewest exponent bits; a named format that cannot hold the depth is refused") {
     val p = PlatformParams()
     // depth 10, 7 fraction bits: e3 tops out at 15.9 < 20, e4 (to 255, normals from 2^-6 <= 10/128) holds it
-    assert(BoxRange.fit(p, Some("m7"), 10.0, "s").boxFormat == FpFormat(4, 7))
-    assert(BoxRange.fit(p, Some("m10"), 1e30, "s").boxFormat == FpFormat(8, 10))
-    assert(BoxRange.fit(p, Some("m10"), 1e4, "s").boxFormat == FpFormat(5, 10))
-    val big = intercept[InputError](BoxRange.fit(p, Some("m7"), 1e39, "s")).getMessage
+    assert(BoxRange.fit(p, Some(7), 10.0, "s").boxFormat == FpFormat(4, 7))
+    assert(BoxRange.fit(p, Some(10), 1e30, "s").boxFormat == FpFormat(8, 10))
+    assert(BoxRange.fit(p, Some(10), 1e4, "s").boxFormat == FpFormat(5, 10))
+    val big = intercept[InputError](BoxRange.fit(p, Some(7), 1e39, "s")).getMessage
     assert(big.contains("BOX_FORMAT=m7") && big.contains("1.00e+39"))
-    val e = intercept[InputError](BoxRange.fit(p.copy(boxFormat = FpFormat.parse("fp16")), Some("fp16"), 1e30, "huge")).getMessage
+    val e = intercept[InputError](BoxRange.fit(p.copy(boxFormat = FpFormat.parse("fp16")), None, 1e30, "huge")).getMessage
     assert(e.contains("BOX_FORMAT=fp16 cannot represent scene 'huge'") && e.contains("1.00e+30") && e.contains("6.55e+04") &&
       e.contains("5 exponent bits") && e.contains("BOX_FORMAT=m10"), e)
     // fp32 is the reference test: never refused; a format that holds the depth passes unchanged
     assert(BoxRange.fit(p, None, 1e-40, "tiny") == p)
     val bf = p.copy(boxFormat = FpFormat.parse("bf16"))
-    assert(BoxRange.fit(bf, Some("bf16"), 1e30, "s") == bf)
+    assert(BoxRange.fit(bf, None, 1e30, "s") == bf)
   }
 }

@@ -75,10 +75,10 @@ class KnobsSpec extends AnyFunSuite {
     for ((flag, v, msg) <- Seq(("tus", "0", "TUS=0: TUS takes an integer 1..1024"), ("node-cache", "48", "NODE_CACHE=48: NODE_CACHE takes 0 or a power of two"),
         ("box-format", "e9m4", "BOX_FORMAT=e9m4: BOX_FORMAT takes fp32, fp24, bf16 or fp16, or e<3..8>m<2..23>, or m<2..23>"),
         ("mem-gbps", "-1", "MEM_GBPS=-1: MEM_GBPS takes a number > 0"), ("clock-mhz", "fast", "CLOCK_MHZ=fast"))) {
-      val e = intercept[InputError](Cli.params(Args(Map(flag -> v))))
+      val e = intercept[InputError](Cli.request(Args(Map(flag -> v))))
       assert(e.getMessage.startsWith(msg), e.getMessage)
     }
-    assert(Cli.params(Args(Map("tus" -> "8", "node-cache" -> "1024", "box-format" -> "bf16"))).tus == 8)
+    assert(Cli.request(Args(Map("tus" -> "8", "node-cache" -> "1024", "box-format" -> "bf16"))).base.tus == 8)
   }
 
   test("the cost model's refusal is the registry's: every preset is calibrated, each uncalibrated value is named") {
