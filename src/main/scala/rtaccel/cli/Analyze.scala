@@ -1,6 +1,5 @@
 package rtaccel.cli
 
-import rtaccel.config.Numerics
 import rtaccel.model.Analysis
 
 /** make analyze: bandwidth vs MPPL (Fig 4) and accesses by level (Figs 5-6) as CSV in OUT. */
@@ -42,13 +41,14 @@ object Analyze {
     Cli.writeText(out.resolve("bandwidth_vs_mppl.csv"), bw.toString)
     Cli.writeText(out.resolve("levels.csv"), lv.toString)
     val top4 = levelRows.take(4)
-    val summary = ujson.Obj(
-      "scene" -> label, "rays" -> rays.count, "m" -> base.m, "box_format" -> lb.params.boxFormat.name, "numerics" -> Numerics.json(lb.params), "short_stack" -> base.shortStack,
+    // the knobs as the level run (MPPL=levels_for_mppl) resolved them; the other MPPLs are bytes_per_ray's keys
+    val summary = ujson.Obj.from(Seq[(String, ujson.Value)]("scene" -> label, "rays" -> rays.count) ++
+      rtaccel.config.Knobs.echo(lb.params, "analyze") ++ Seq[(String, ujson.Value)](
       "bytes_per_ray" -> ujson.Obj.from(results.map { case (k, _, _, r) =>
         k.toString -> ujson.Obj("node" -> r.nodeBytesPerRay, "prim" -> r.primBytesPerRay, "total" -> r.totalBytesPerRay) }),
       "levels_for_mppl" -> levelMppl,
       "top4_levels_nodes" -> top4.map(_.nodes).sum, "top4_levels_node_share" -> top4.last.cumNodeShare,
-      "top4_levels_access_share" -> top4.last.cumAccessShare)
+      "top4_levels_access_share" -> top4.last.cumAccessShare))
     println(ujson.write(summary))
   }
 }

@@ -1,6 +1,5 @@
 package rtaccel.cli
 
-import rtaccel.config.Numerics
 import java.nio.file.Paths
 import rtaccel.area.{Board, Boards, CostModel, Resources, Synthesis, Timing}
 import rtaccel.io.InputError
@@ -38,8 +37,8 @@ object Area {
     verdict.foreach { case (r, used, have) => throw new CheckFailed(Seq(f"does not fit ${board.name}: $r $used%.0f > $have")) }
   }
 
-  private def header(p: rtaccel.config.PlatformParams, b: Board, fidelity: String, top: String) = ujson.Obj(
-    "config" -> p.name, "numerics" -> Numerics.json(p), "pipeline" -> rtaccel.config.Pipelining.json(p), "board" -> b.name, "family" -> b.family, "fidelity" -> fidelity, "top" -> top)
+  private def header(p: rtaccel.config.PlatformParams, b: Board, fidelity: String, top: String) = ujson.Obj.from(rtaccel.config.Knobs.echo(p, "area") ++
+    Seq[(String, ujson.Value)]("board" -> b.name, "family" -> b.family, "fidelity" -> fidelity, "top" -> top))
 
   /** A real synthesis (cached per circuit), every module of the hierarchy in `units`. */
   private def yosysJson(a: Args, p: rtaccel.config.PlatformParams, board: Board, out: java.nio.file.Path): ujson.Obj = {

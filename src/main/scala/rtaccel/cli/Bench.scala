@@ -1,6 +1,5 @@
 package rtaccel.cli
 
-import rtaccel.config.Numerics
 import rtaccel.bvh.{MemoryImage, Mbvh}
 import rtaccel.model.Traversal
 
@@ -28,11 +27,12 @@ object Bench {
       val c0 = cpu.getCurrentThreadCpuTime; val t0 = System.nanoTime(); tr.traceAll(rays)
       ((System.nanoTime() - t0) / 1e9, (cpu.getCurrentThreadCpuTime - c0) / 1e9)
     }
-    println(ujson.write(ujson.Obj(
-      "scene" -> a.get("scene-label", a.need("tris")), "rays" -> rays.count, "triangles" -> scene.triangles,
-      "config" -> b.params.name, "numerics" -> Numerics.json(b.params), "m" -> p.m, "mppl" -> p.mppl, "repeat" -> repeat, "threads" -> 1,
+    println(ujson.write(ujson.Obj.from(Seq[(String, ujson.Value)](
+      "scene" -> a.get("scene-label", a.need("tris")), "rays" -> rays.count, "triangles" -> scene.triangles) ++
+      rtaccel.config.Knobs.echo(b.params, "bench") ++ Seq[(String, ujson.Value)](
+      "repeat" -> repeat, "threads" -> 1,
       "model_build_s_median" -> median(builds.map(_._1)),
       "model_rays_per_s_median" -> rays.count / median(traces.map(_._1)),
-      "model_rays_per_cpu_s_median" -> rays.count / median(traces.map(_._2)), "rtaccel" -> Cli.version)))
+      "model_rays_per_cpu_s_median" -> rays.count / median(traces.map(_._2)), "rtaccel" -> Cli.version))))
   }
 }

@@ -1,6 +1,5 @@
 package rtaccel.cli
 
-import rtaccel.config.Numerics
 import rtaccel.bvh.MemoryImage
 import rtaccel.cache.{CacheCounts, CacheModel, CacheSink, ClusterSinks, Replay}
 import rtaccel.config.{CacheParams, CachePolicy}
@@ -68,9 +67,9 @@ object CacheSim {
     val (pred, predictS) = (1 to 3).map { _ =>
       val t = System.nanoTime(); val r = rtaccel.cache.Throughput.predict(p, sink, rays.count, tus); (r, (System.nanoTime() - t) / 1e9)
     }.minBy(_._2)
-    val j = ujson.Obj(
-      "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version, "config" -> p.name, "m" -> p.m, "mppl" -> p.mppl,
-      "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "short_stack" -> p.shortStack, "tus" -> tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "resp_order" -> p.respOrder, "ray_store" -> p.rayStore, "tag_forward" -> p.tagForward, "node_banks" -> p.nodeBanks, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
+    val j = ujson.Obj.from(Seq[(String, ujson.Value)](
+      "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version) ++ rtaccel.config.Knobs.echo(p, "cachesim") ++ Seq[(String, ujson.Value)](
+      "tus" -> tus, "rays" -> rays.count, "nodes" -> b.bvh.numNodes, "node_levels" -> (b.bvh.maxLevel + 1),
       "node_accesses" -> sink.nodeAccesses.toDouble, "leaf_accesses" -> sink.leafAccesses.toDouble,
       "node_cache" -> stats(sink.nodeCache, geometry.nodeCache, node), "prim_cache" -> stats(sink.primCache, geometry.primCache, prim),
       "node_bytes_per_ray" -> nodeBpr, "prim_bytes_per_ray" -> primBpr, "dram_bytes_per_ray" -> (nodeBpr + primBpr),
@@ -80,7 +79,6 @@ object CacheSim {
       "bandwidth_bound_rays_per_s" -> bound(nodeBpr + primBpr),
       "bandwidth_bound_rays_per_s_nocache" -> bound(nodeBprNoCache + primBprNoCache),
       "bandwidth_bound_note" -> "clock x sustained DRAM bytes/cycle / DRAM bytes per ray; ignores compute and latency limits",
-      "clock_mhz" -> p.clockMhz, "clock_source" -> p.clockSource, "pipeline" -> rtaccel.config.Pipelining.json(p),
       "predicted_rays_per_s" -> pred.raysPerCycle * p.cyclesPerSecond,
       "predicted_rays_per_s_no_hol" -> pred.raysPerCycleNoHol * p.cyclesPerSecond,
       "predicted_cycles_per_ray" -> ujson.Obj("latency_one_tu" -> pred.latencyCycles, "dram" -> pred.dramCycles, "beats" -> pred.beatCycles,
@@ -91,7 +89,7 @@ object CacheSim {
       "predict_s" -> predictS,
       "trace_s" -> (if (traceReused) 0.0 else traceS), "trace_reused" -> traceReused,
       "load_s" -> loadS, "bvh_build_s" -> b.buildSeconds, "wall_s" -> wall, "accesses_per_s" -> accesses / math.max(wall, 1e-9),
-      "repeat" -> repeat, "wall_s_first" -> runs.head._2)
+      "repeat" -> repeat, "wall_s_first" -> runs.head._2))
     println(ujson.write(j))
   }
 

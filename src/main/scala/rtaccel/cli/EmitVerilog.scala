@@ -1,6 +1,5 @@
 package rtaccel.cli
 
-import rtaccel.config.Numerics
 import java.nio.file.{Files, Paths}
 import rtaccel.top.RtAccelTop
 
@@ -62,7 +61,8 @@ object EmitVerilog {
     Cli.writeText(out.resolve("rtaccel_regs.h"), rtaccel.top.RegHeaders.c(p, Cli.version))
     Cli.writeText(out.resolve("rtaccel_regs.py"), rtaccel.top.RegHeaders.python(p, Cli.version))
     System.err.println(s"[verilog] ${files.length} files in $out (config ${p.name}: ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}, stack ${p.stackDepth})")
-    println(ujson.write(ujson.Obj("config" -> p.name, "numerics" -> Numerics.json(p), "pipeline" -> rtaccel.config.Pipelining.json(p), "out" -> out.toString, "files" -> files.length, "top" -> "RtAccelTop",
-      "regs_h" -> out.resolve("rtaccel_regs.h").toString, "regs_py" -> out.resolve("rtaccel_regs.py").toString)))
+    println(ujson.write(ujson.Obj.from(rtaccel.config.Knobs.echo(p, "verilog") ++ Seq[(String, ujson.Value)](
+      "out" -> out.toString, "files" -> files.length, "top" -> "RtAccelTop",
+      "regs_h" -> out.resolve("rtaccel_regs.h").toString, "regs_py" -> out.resolve("rtaccel_regs.py").toString))))
   }
 }

@@ -47,7 +47,8 @@ object TimingCmd {
     // the median run (the lower of the middle two for an even count): a real run whose path is reported whole
     val ranked = runs.sortBy(_.fmaxMhz.getOrElse(0.0))
     val shown = ranked((ranked.length - 1) / 2)
-    val j = ujson.Obj("config" -> p.name, "board" -> board.name, "family" -> board.family, "unit" -> unit)
+    val j = ujson.Obj.from(rtaccel.config.Knobs.echo(p, "timing") ++
+      Seq[(String, ujson.Value)]("board" -> board.name, "family" -> board.family, "unit" -> unit))
     val r = shown.result
     j("fmax_mhz") = r("fmax_mhz"); j("target_mhz") = target
     j("clock_source") = if (a.opt("clock-mhz").isDefined) p.clockSource else "board"

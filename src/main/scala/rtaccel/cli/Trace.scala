@@ -1,6 +1,5 @@
 package rtaccel.cli
 
-import rtaccel.config.Numerics
 import rtaccel.bvh.MemoryImage
 import rtaccel.io.Npy
 import rtaccel.model.{AccessRecorder, RayStats, Traversal}
@@ -24,20 +23,19 @@ object Trace {
       if (k < 0) throw new rtaccel.io.InputError(s"--exhaustive must be >= 0 rays (got $k)")
       rtaccel.model.Exhaustive.check(p, b.scene, rays, hits, k)
     }
-    val summary = ujson.Obj(
-      "scene" -> a.get("scene-label", a.need("tris")), "config" -> p.name, "rtaccel" -> Cli.version,
-      "m" -> p.m, "mppl" -> p.mppl, "triangles" -> b.scene.triangles, "nodes" -> b.bvh.numNodes,
+    val summary = ujson.Obj.from(Seq[(String, ujson.Value)](
+      "scene" -> a.get("scene-label", a.need("tris")), "rtaccel" -> Cli.version) ++ rtaccel.config.Knobs.echo(p, "trace") ++ Seq[(String, ujson.Value)](
+      "triangles" -> b.scene.triangles, "nodes" -> b.bvh.numNodes,
       "leaves" -> b.bvh.numLeaves, "node_levels" -> (b.bvh.maxLevel + 1), "stack_bound" -> b.bvh.stackBound,
       "ref_fields" -> ujson.Obj("node_id_bits" -> p.refs.nodeIdBits, "prim_index_bits" -> p.refs.primIndexBits,
         "count_bits" -> p.refs.countBits, "level_bits" -> p.refs.levelBits, "ref_bits" -> p.refs.refBits),
-      "stack_depth" -> p.stackDepth, "normalize_exponent" -> scaleExp, "rays" -> rays.count, "hits" -> hits.prim.count(_ >= 0),
+      "normalize_exponent" -> scaleExp, "rays" -> rays.count, "hits" -> hits.prim.count(_ >= 0),
       "node_fetches" -> st.nodeFetches.toDouble, "leaf_fetches" -> st.leafFetches.toDouble, "prim_tests" -> st.primTests.toDouble, "box_tests" -> st.boxTests.toDouble,
       "node_bytes_per_ray" -> st.nodeFetches * p.nodeAccessBytes / n,
       "prim_bytes_per_ray" -> st.primBytes / n,
       "max_stack" -> st.maxStack, "stack_overflow_rays" -> st.overflows, "overflowed" -> st.overflows,
-      "max_steps" -> p.stepLimit.toDouble, "step_limit_rays" -> st.stepLimits,
-      "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "restarts" -> st.restarts.toDouble,
-      "build_s" -> b.buildSeconds, "trace_s" -> secs, "rays_per_s" -> rays.count / math.max(secs, 1e-9))
+      "step_limit_rays" -> st.stepLimits, "restarts" -> st.restarts.toDouble,
+      "build_s" -> b.buildSeconds, "trace_s" -> secs, "rays_per_s" -> rays.count / math.max(secs, 1e-9)))
     exhaustive.foreach { e =>
       summary("exhaustive_rays") = e.rays; summary("lost_hits") = e.lost
       summary("lost_hit_rays") = ujson.Arr(e.firstLost.map(ujson.Num(_)): _*)

@@ -248,9 +248,9 @@ object PlatformRun {
         s"$nOverflow stack overflows, $nStepLimit step limits, ${rays.count - rtl.seen.count(_ > 0)} not returned)")
       val n = rays.count.toDouble
       val peakBytesPerCycle = p.memPeakBytesPerSecondTotal / p.cyclesPerSecond
-      val json = ujson.Obj(
-        "rays" -> rays.count, "cycles" -> cycles.toDouble, "clock_mhz" -> p.clockMhz, "clock_source" -> p.clockSource, "mem_gbps" -> p.memory.bytesPerSecond / 1e9,
-        "pipeline" -> rtaccel.config.Pipelining.json(p),
+      // the knobs as the circuit ran them (config.Knobs.echo), then the run's own figures
+      val json = ujson.Obj.from(rtaccel.config.Knobs.echo(p, "simulate") ++ Seq[(String, ujson.Value)](
+        "rays" -> rays.count, "cycles" -> cycles.toDouble,
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
         "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
@@ -262,15 +262,14 @@ object PlatformRun {
         "sim_cycles_per_cpu_s" -> stepped / math.max(1e-9, simCpu), "sim_cpu_s" -> simCpu,
         // where the wall time went: model + inputs, simulator build (or cache load) + host setup, the run, readout and checks
         "wall_model_s" -> modelWall, "wall_build_s" -> (tSim - t0) / 1e9, "wall_readout_s" -> (System.nanoTime() - tEnd) / 1e9,
-        "scene" -> label, "config" -> p.name, "tus" -> p.tus, "ius" -> p.ius, "mem_channels" -> p.memChannels, "resp_order" -> p.respOrder, "ray_store" -> p.rayStore, "tag_forward" -> p.tagForward, "node_banks" -> p.nodeBanks, "m" -> p.m, "mppl" -> p.mppl,
-        "stack_depth" -> p.stackDepth, "short_stack" -> p.shortStack, "box_format" -> p.boxFormat.name, "numerics" -> Numerics.json(p), "model_restarts" -> stats.restarts.toDouble, "overflowed" -> nOverflow, "model_overflowed" -> stats.overflows,
+        "scene" -> label, "model_restarts" -> stats.restarts.toDouble, "overflowed" -> nOverflow, "model_overflowed" -> stats.overflows,
         "stack_overflow_rays" -> nOverflow, "model_stack_overflow_rays" -> stats.overflows,
         "overflow_disagreements" -> overflowDisagree, "read_errors" -> nReadError,
         "model_read_errors" -> stats.readErrors, "read_error_disagreements" -> readErrorDisagree,
         "mem_error_rate" -> o.memErrorRate, "mem_error_beats" -> counters("mem_read_errors").toDouble,
-        "max_steps" -> p.stepLimit.toDouble, "step_limit_rays" -> nStepLimit, "model_step_limit_rays" -> stats.stepLimits,
+        "step_limit_rays" -> nStepLimit, "model_step_limit_rays" -> stats.stepLimits,
         "step_limit_disagreements" -> stepLimitDisagree,
-        "mem_error_mode" -> (if (o.errorSticky) MemFaults.Sticky else MemFaults.Transient), "mem_retry_limit" -> p.memRetries,
+        "mem_error_mode" -> (if (o.errorSticky) MemFaults.Sticky else MemFaults.Transient),
         "mem_retries" -> counters("mem_retries").toDouble,
         // lookups that found their line poisoned (an errored fill) and read it again (null without a cache)
         "poison_refetches" -> (if (cached) ujson.Num(refetched.map(_.length).sum) else ujson.Null),
@@ -289,7 +288,7 @@ object PlatformRun {
         "cluster_accesses" -> (if (cached) ujson.Arr.from(logged.take(p.ius).map(l => ujson.Num(l.length))) else ujson.Null),
         // NODE_BANKS: the node references each bank of the shared node cache accepted (how evenly the ids spread)
         "bank_accesses" -> (if (cached && p.nodeShared) ujson.Arr.from(logged.drop(p.ius).map(l => ujson.Num(l.length))) else ujson.Null),
-        "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> rtaccel.config.Version.current)
+        "wall_s" -> (System.nanoTime() - t0) / 1e9, "rtaccel" -> rtaccel.config.Version.current))
       json("roofline") = if (rays.count == 0 || cycles == 0) ujson.Null // docs/roofline.md
         else rtaccel.perf.Roofline.of(p, rtaccel.perf.Roofline.Run.fromCounters(rays.count, counters)).json
       val failed = failures(json)

@@ -23,6 +23,9 @@ class CacheSimSpec extends AnyFunSuite {
     for (k <- Seq("node_cache", "prim_cache", "wall_s", "accesses_per_s", "node_bytes_per_ray", "prim_bytes_per_ray",
       "bandwidth_bound_rays_per_s", "dram_bytes_per_ray")) assert(j.obj.contains(k), k)
     for (c <- Seq("node_cache", "prim_cache"); k <- Seq("hits", "misses", "miss_rate")) assert(j(c).obj.contains(k), s"$c.$k")
+    // the configuration echoed from the registry, under the keys every command uses
+    assert(j("caches")("node")("policy").str == "lrp" && j("caches")("node")("max_level").num == 3 && j("caches")("prim")("ways").num == 2)
+    assert(j("tus").num == 4 && j("config").str == "fit" && j("numerics")("box_format").str == "fp32")
     assert(j("node_cache")("hits").num + j("node_cache")("misses").num == j("node_accesses").num)
     assert(j("node_bytes_per_ray").num < j("node_bytes_per_ray_nocache").num)
     assert(j("prim_bytes_per_ray").num <= j("prim_bytes_per_ray_nocache").num)

@@ -31,6 +31,10 @@ class CliSpec extends AnyFunSuite {
     for (f <- Seq("hits.npy", "trace.npy", "summary.json")) assert(Files.size(out.resolve(f)) > 0, f)
     val s = ujson.read(Files.readString(out.resolve("summary.json")))
     assert(s("rays").num == 100 && s("triangles").num == 300 && s("stack_overflow_rays").num == 0)
+    // the knobs as the trace resolved them (CONFIG=fit: the fitted stack), echoed from the registry
+    val p = Cli.build(scene, rays, Cli.request(Args(Map.empty))).params
+    for ((k, v) <- rtaccel.config.Knobs.echo(p, "trace")) assert(s(k) == v, k)
+    assert(s("stack_depth").num == s("stack_bound").num && s("config").str == "fit")
   }
 
   test("bad input: one error, status 2, nothing written in OUT") {

@@ -92,4 +92,21 @@ class KnobsSpec extends AnyFunSuite {
     assert(Knobs.uncalibrated(base.copy(tagForward = true, nodeCache = CacheParams())).isEmpty)
     assert(Knobs.uncalibrated(base.copy(tagForward = true)).map(_._1.make) == Seq("TAG_FORWARD"))
   }
+
+  test("every knob a command reads is echoed by the registry, from the resolved platform, under one key everywhere") {
+    for (k <- Knobs.all if k.make != "CATALOG") assert(k.echo(Presets.paper2017).nonEmpty, s"${k.make} has no JSON key")
+    val p = Presets.paper2017.copy(tus = 8, boxFormat = rtaccel.fp.FpFormat(6, 9), memRetries = 2,
+      nodeCache = CacheParams(1024, 2, CachePolicy.Lru), clockMhz = 123, clockSource = "given")
+    val e = Knobs.echo(p, "simulate").toMap
+    assert(e("tus").num == 8 && e("box_format").str == "e6m9" && e("numerics")("box_format").str == "e6m9" && e("mem_retry_limit").num == 2)
+    assert(e("caches")("node")("ways").num == 2 && e("caches")("node")("policy").str == "lru" && e("caches")("prim")("entries").num == 0)
+    assert(e("clock_mhz").num == 123 && e("clock_source").str == "given" && e("config").str == "paper2017")
+    // a command echoes exactly the knobs it reads: trace reads no TUS, no cache and no clock
+    val t = Knobs.echo(p, "trace").map(_._1)
+    assert(!t.contains("tus") && !t.contains("caches") && !t.contains("clock_mhz") && t.contains("stack_depth"), t)
+    for (cmd <- Seq("trace", "cachesim", "simulate", "analyze", "bench", "verilog", "area", "timing"))
+      assert(Knobs.echo(p, cmd).map(_._1).toSet == Knobs.all.filter(_.commands(cmd)).flatMap(_.echo(p).map(_._1)).toSet, cmd)
+    // the export names each knob's keys, for dse/ and scripts reading the JSON lines
+    assert(Knobs.json("knobs").arr.find(_("make").str == "NODE_WAYS").get("json_keys").arr.map(_.str) == Seq("caches"))
+  }
 }
