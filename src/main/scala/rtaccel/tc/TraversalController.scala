@@ -68,11 +68,7 @@ class TraversalController(p: PlatformParams) extends Module {
   prepared.io.enq.bits.tmax := rayDelayed.f(7)
   assert(!outValid || prepared.io.enq.ready, "ray preparation overran its queue")
 
-  // Dispatch to the first free TU. With PIPELINE, a small queue between the ray queue and the TUs registers
-  // the handshake: otherwise the TUs' ready, ORed over all of them, reaches the ray queue's read pointer and its
-  // RAM's read address in the same cycle (the TC's routed critical path on ECP5 once the credits were in).
-  private val ready = rtaccel.arb.Slice(p, prepared.io.deq)
-  /** Cycles from a ray's acceptance to its offer to a free TU: the dividers, the ray queue and the dispatch queue. */
+  /** Cycles from a ray's acceptance to its offer to a free TU: the dividers, the ray queue and the dispatch register. */
   val dispatchLatency: Int = prepLatency + 1 + (if (p.stageBudget.isDefined) 1 else 0)
   // With PIPELINE the TUs' ready is seen two cycles late, less the TUs offered a ray since: a TU leaves idle only
   // by taking a ray, so one seen free is still free (asserted below). The TUs' ready is registered, and the choice
@@ -81,22 +77,40 @@ class TraversalController(p: PlatformParams) extends Module {
   /** Cycles late the TC sees a TU become free (0 or 2). */
   val readyLag: Int = if (p.stageBudget.isDefined) 2 else 0
   private val offered = Wire(Vec(p.tus, Bool()))
+  private val rayOut = Wire(Decoupled(new TuRay(p)))
   // one-hot, none when no TU is free: a TU is offered a ray only while it is free
   val target: Seq[Bool] =
-    if (readyLag == 0) PriorityEncoderOH(io.tuRay.map(_.ready))
-    else {
+    if (readyLag == 0) {
+      rayOut <> prepared.io.deq
+      PriorityEncoderOH(io.tuRay.map(_.ready))
+    } else {
       val none = VecInit(Seq.fill(p.tus)(false.B))
       val wasReady = RegNext(VecInit(io.tuRay.map(_.ready)), none)
       val wasOffered = RegNext(offered, none)
       // free in the next cycle as seen: ready two cycles before it, offered no ray in either cycle since
       val freeNext = (0 until p.tus).map(i => wasReady(i) && !wasOffered(i) && !offered(i))
+      // The dispatch register between the ray queue and the TUs. Whether a TU takes its ray in the next cycle is
+      // known a cycle ahead (freeNext), so the register's load enable is itself a register: `load` = empty or
+      // taken, as the next cycle will see them. Neither the 32-way OR of the choice (the TC's routed critical path
+      // on ECP5, into a two-entry slice's enables) nor any other logic sits between a register and the enables
+      // of the ray's 385 bits, and the queue's read pointer steps on a register too.
+      val anyNext = freeNext.reduce(_ || _)
+      val held = Reg(new TuRay(p))
+      val heldValid = RegInit(false.B)
+      val load = RegInit(true.B) // = !heldValid || (a TU takes `held` now), from registers of the cycle before
+      prepared.io.deq.ready := load
+      when(load) { held := prepared.io.deq.bits; heldValid := prepared.io.deq.valid }
+      load := !(Mux(load, prepared.io.deq.valid, heldValid)) || anyNext
+      rayOut.valid := heldValid
+      rayOut.bits := held
+      assert(load === (!heldValid || rayOut.ready), "TraversalController: the dispatch register's load disagrees with its handshake")
       RegNext(VecInit(TraversalController.lowest(freeNext)), none)
     }
-  ready.ready := target.reduce(_ || _)
+  rayOut.ready := target.reduce(_ || _)
   for ((t, i) <- io.tuRay.zipWithIndex) {
-    t.valid := ready.valid && target(i)
+    t.valid := rayOut.valid && target(i)
     offered(i) := t.valid
-    t.bits := ready.bits
+    t.bits := rayOut.bits
     when(t.valid) { assert(t.ready, "TraversalController: a ray offered to a TU that is not free") }
   }
 
