@@ -350,17 +350,22 @@ object Fp {
       o.xExt := Cat(0.U(1.W), r.xSig, 0.U(g.W))
       o
     }
-    // 3: add
-    val ew = expW(f) max expW(fo)
+    // 3: add. Without underflow (fo's range holds f's) the exponent only falls by the normalising shift, never
+    // below 1: its signed datapath needs to hold xExp + 1 in fo's bias, not the products' and quotients' range
+    val canUnderflow = fo.bias < f.bias
+    val ew = if (canUnderflow) expW(f) max expW(fo) else log2Ceil((1 << f.expBits) - f.bias + fo.bias + 1) + 1
     val sum = pipe.step(al, Depth.carry(m + 5) + Depth.reduce(m + 5)) { r =>
-      val res = Mux(r.effSub, r.xExt - r.yExt, r.xExt + r.yExt) // m+5 bits, top bit = carry position
+      // one carry chain for both: x - y = x + ~y + 1 (y <= x, so it never wraps), the inversion in the chain's LUTs;
+      // Mux(effSub, x - y, x + y) built two chains and a mux behind them
+      val w = m + 5
+      val res = (r.xExt +& (r.yExt ^ Fill(w, r.effSub)) +& r.effSub.asUInt)(w - 1, 0) // top bit = carry position
       // exp = xExp + 1 >= 2 in f; a narrower exponent range can underflow
       val exp = r.xExp.zext.pad(ew) + (1 - f.bias + fo.bias).S
       val isZero = res === 0.U
       roundIn(r.xSign, exp, res, false.B, toPos.map(_ => r.toPos),
         special(r.sp.nan, r.sp.inf, isZero, Mux(r.sp.inf, r.sp.sign, r.zeroSign)))
     }
-    roundPackT(pipe, fo, sum, canUnderflow = fo.bias < f.bias, directed = toPos.isDefined)
+    roundPackT(pipe, fo, sum, canUnderflow = canUnderflow, directed = toPos.isDefined)
   }
 
   private def comb(x: UInt): Timed[UInt] = Timed(x, 0, 0)
@@ -518,7 +523,12 @@ object Fp {
       // 2m+2 bits, binary point after the top bit pair
       roundIn(x.sign, x.exp, sumOf(x, oo.indices, oo, 0, 2 * n), false.B, toPos.map(_ => x.toPos), x.sp)
     }
-    roundPackT(pipe, fo, r, directed = toPos.isDefined)
+    // A product normalised left has at most n leading zeros: with one operand normal (hidden bit set) and the other
+    // z <= n - 1 leading zeros, the 2n-bit product has z or z + 1. Two subnormal operands give an exponent below 1
+    // when fo's bias is below 2 f.bias - 2 (ex = 1 + 1 - (2 f.bias - fo.bias - 1) < 1): the right shift serves
+    // them, so the LZC and left shifter need n + 1 positions, not 2n (a wider fo, mulWide, keeps all of them).
+    val maxLs = if (fo.bias < 2 * f.bias - 2) n else Int.MaxValue
+    roundPackT(pipe, fo, r, maxLeftShift = maxLs, directed = toPos.isDefined)
   }
   private def mulCore(f: FpFormat, a: UInt, b: UInt, fo: FpFormat, toPos: Option[Bool]): UInt =
     mulCore(Stager.none, f, comb(a), comb(b), fo, toPos.map(combB)).v
