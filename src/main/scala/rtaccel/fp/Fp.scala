@@ -429,7 +429,9 @@ object Fp {
     */
   def mulWide(f: FpFormat, fo: FpFormat, a: UInt, b: UInt): UInt = mulCore(f, a, b, fo, None)
 
-  /** A product's operands unpacked, with the result's sign and special case: what the DSP blocks start from. */
+  /** A product's operands unpacked, with the result's sign and each operand's class: what the DSP blocks start
+    * from. The classes combine into the special result a step later (`sp`), beside the blocks: the fields' OR trees
+    * and that combination in one step were TriPipe's routed critical path on ECP5 (into a multiplier's NaN flag). */
   class MulIn(f: FpFormat) extends Bundle {
     val sigA = UInt((f.manBits + 1).W)
     val sigB = UInt((f.manBits + 1).W)
@@ -437,7 +439,9 @@ object Fp {
     val expB = UInt(f.expBits.W)
     val sign = Bool()
     val toPos = Bool()
-    val sp = new Special
+    val nanA = Bool(); val infA = Bool(); val zeroA = Bool()
+    val nanB = Bool(); val infB = Bool(); val zeroB = Bool()
+    def sp: Special = special(nanA || nanB || (infA && zeroB) || (zeroA && infB), infA || infB, zeroA || zeroB, sign)
   }
 
   /** A product's pieces between the steps of its sum: piece i (at bit offset offs(i) of the product, which the
@@ -481,8 +485,8 @@ object Fp {
       o.sigA := ua.sig; o.sigB := ub.sig; o.expA := ua.exp; o.expB := ub.exp
       o.sign := ua.sign ^ ub.sign
       o.toPos := (if (toPos.isDefined) v(2)(0) else false.B)
-      val isNaN = ua.isNaN || ub.isNaN || (ua.isInf && ub.isZero) || (ua.isZero && ub.isInf)
-      o.sp := special(isNaN, ua.isInf || ub.isInf, ua.isZero || ub.isZero, o.sign)
+      o.nanA := ua.isNaN; o.infA := ua.isInf; o.zeroA := ua.isZero
+      o.nanB := ub.isNaN; o.infB := ub.isInf; o.zeroB := ub.isZero
       o
     }
     val expOf = (x: MulIn) => (x.expA.zext.pad(ew) + x.expB.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
