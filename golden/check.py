@@ -148,7 +148,9 @@ def _compare(tris, rays, golden_hits, model_hits):
         tmax = np.maximum(np.abs(gt), np.abs(mt))
         dt = np.abs(gt - mt)
         close = both & (dt <= AGREE_REL * tmax)
-        agree = (gp == mp) | close
+        # the same prim agrees only at nearly the same t: a wrong t on the right triangle is a difference to explain
+        # (a tie within the classes' tolerance, or unexplained), not an agreement; two misses agree
+        agree = ((gp == mp) & ~both) | close
         same = both & (gp == mp)
         rel = np.where(tmax[same] > 0, dt[same] / np.where(tmax[same] > 0, tmax[same], 1), 0.0)
     nonfinite = int(np.sum(~np.isfinite(rel)))
@@ -210,8 +212,10 @@ def _compare(tris, rays, golden_hits, model_hits):
         ttol = TIE_REL * np.maximum(np.abs(gtd), np.abs(mtd)) + POS_TOL * scale / dn
         both_d = g_hit & m_hit
         tie_t = both_d & (np.abs(gtd - mtd) <= ttol)
-        m_at_g = both_d & inside_m & (tm64 >= 0) & (np.abs(tm64 - gtd) <= ttol)
-        g_at_m = both_d & inside_g & (tg64 >= 0) & (np.abs(tg64 - mtd) <= ttol)
+        # one prim also hit at the other's t: two prims; for the same prim it would excuse a wrong t by the right one
+        other = both_d & (gpd != mpd)
+        m_at_g = other & inside_m & (tm64 >= 0) & (np.abs(tm64 - gtd) <= ttol)
+        g_at_m = other & inside_g & (tg64 >= 0) & (np.abs(tg64 - mtd) <= ttol)
     # 4. tie: both hit at nearly the same t, or one side's prim is also hit (float64) at the other's t
     assign(tie_t | m_at_g | g_at_m, "tie")
 

@@ -28,7 +28,7 @@ def case(o, d, g, m, expect):
 
 up = (0, 0, 1)
 case((0.5, -0.5, 0), up, (0, 1.0), (0, 1.0), "agree")              # same prim, same t
-case((0.5, -0.5, 0), up, (0, 1.0), (0, 1.001), "agree")            # same prim, t differs (max_rel_t_err)
+case((0.5, -0.5, 0), up, (0, 1.0), (0, 1.000005), "agree")         # same prim, t within 1e-5 (max_rel_t_err)
 case((20, 20, 0), up, (-1, np.inf), (-1, np.inf), "agree")         # both miss
 case((0.5, -0.5, 0), up, (0, 1.0), (2, 1.0), "agree")              # coincident duplicate
 case((0.5, -0.5, 0), up, (0, 1.0), (6, 1.0 * (1 + 0.9e-5)), "agree")  # within 1e-5 relative t
@@ -42,6 +42,8 @@ case((6, 5, 0), up, (-1, np.inf), (0, 1.0), "degenerate")          # passes thro
 case((0.5, -0.5, 0), up, (0, 1.0), (-1, np.inf), "unexplained")    # plain miss
 case((0.5, -0.5, 0), up, (0, 1.0), (6, 3.0), "unexplained")        # wrong prim far away
 case((0.5, -0.5, 0), up, (0, 1.0), (6, 1.0 * (1 + 1.1e-5)), "tie")  # just beyond the agree tolerance
+case((0.5, -0.5, 0), up, (0, 1.0), (0, 1.00005), "tie")            # same prim, t within the tie tolerance only
+case((0.5, -0.5, 0), up, (0, 1.0), (0, 1.001), "unexplained")      # same prim at a wrong t: not an agreement
 
 
 def _arrays():
