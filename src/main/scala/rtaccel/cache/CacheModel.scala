@@ -4,7 +4,7 @@ import rtaccel.cache.policy.{LevelPolicy, Policies, ReplacementPolicy}
 import rtaccel.config.{CacheParams, CachePolicy}
 
 /** Trace-driven cache model (plain arrays, no allocation per access). `lines` lines of one request each
-  * (node cache: one node; primitive cache: one leaf of up to MPPL primitives, so lines = entries / MPPL via
+  * (node cache: one node; primitive cache: one leaf of up to MPPL primitives, so lines = CacheParams.lines(MPPL), via
   * `entriesPerLine`). A request's line id is `lineOf(id)`; set index = low log2(sets) bits of the line id,
   * tag = the rest (paper 6.2; the model keeps the whole line id as the tag).
   *
@@ -26,7 +26,7 @@ final class CacheModel(val c: CacheParams, code: LevelPolicy.Code, lineOf: Int =
                        val banks: Int = 1) {
   require(c.entries > 0, "CacheModel needs entries > 0 (0 means no cache)")
   require(entriesPerLine >= 1, "entries per line must be positive")
-  val lines: Int = math.max(1, c.entries / entriesPerLine)
+  val lines: Int = c.lines(entriesPerLine)
   require(Integer.bitCount(lines) == 1, s"cache lines ($lines) must be a power of two")
   val ways: Int = c.ways
   require(lines % ways == 0, s"cache ways ($ways) must divide its lines ($lines)")

@@ -32,6 +32,10 @@ final case class CacheParams(entries: Int = 0, ways: Int = 1, policy: CachePolic
   require(maxLevel >= 0, s"MAX_LEVEL must be >= 0 (got $maxLevel)")
   /** hybrid: lines of the LRP side cache beside a direct-mapped array of `lines` lines (an eighth, at least one);
     * the trace model, the RTL and the bank check all size it here */
+  /** Lines of `entriesPerLine` entries each (a node, or a leaf of MPPL primitives): the largest power of two that
+    * fits the entries, so an MPPL that is not a power of two leaves the remainder unused (PRIM_CACHE=64 at MPPL 3:
+    * 16 lines of 3, not 21). The RTL (cache.hw.CacheGeometry) and the model (cache.CacheModel) both read it. */
+  def lines(entriesPerLine: Int): Int = Integer.highestOneBit(math.max(1, entries / entriesPerLine))
   def sideLines(lines: Int): Int = if (policy == CachePolicy.Hybrid) math.max(1, lines / CacheParams.HybridSideShare) else 0
   /** hybrid: the side cache's ways (true LRU, at most HybridSideWays) */
   def sideWays(lines: Int): Int = math.min(CacheParams.HybridSideWays, sideLines(lines))

@@ -28,7 +28,8 @@ final class RefCache(c: CacheParams, perLine: Int = 1) {
       while (hi - lo > 1) { val mid = (lo + hi) / 2; if (victimRight((lo, hi))) lo = mid else hi = mid }; lo }
   }
   private val plrus = mutable.Map[Int, PlruTree]()
-  val lines: Int = math.max(1, c.entries / perLine)
+  // whole lines of perLine entries, as many as a power of two allows (written here again, not read from CacheParams)
+  val lines: Int = Iterator.iterate(1)(_ * 2).takeWhile(_ <= math.max(1, c.entries / perLine)).toSeq.last
   val sets: Int = lines / c.ways
   private val lists = mutable.Map[Int, List[(Int, Int)]]().withDefaultValue(Nil)
   private val slots = mutable.Map[Int, Array[Option[(Int, Int)]]]()
@@ -103,11 +104,18 @@ class CacheModelSpec extends AnyFunSuite {
     }
   }
 
-  test("primitive cache: lines = entries / MPPL, line id = first primitive slot") {
+  test("primitive cache: lines = entries / MPPL (a power of two of whole leaves), line id = first primitive slot") {
     val c = CacheParams(64, 2, CachePolicy.Lru)
     val m = new CacheModel(c, LevelPolicy.paper, identity, 4); val ref = new RefCache(c, 4)
     assert(m.lines == 16)
     for (id <- randomTrace(9, 20000, 400)) assert(m.access(id, 3) == ref.access(id, 3))
+    // an MPPL that is not a power of two: whole leaves in a power of two of lines (64 entries at MPPL 3: 16 of 21)
+    for ((e, mppl, want) <- Seq((64, 3, 16), (8, 3, 2), (4, 3, 1), (4096, 5, 512), (64, 16, 4))) {
+      val c3 = CacheParams(e, 1, CachePolicy.Dm)
+      val m3 = new CacheModel(c3, LevelPolicy.paper, identity, mppl); val r3 = new RefCache(c3, mppl)
+      assert(m3.lines == want && r3.lines == want, s"$e entries at MPPL $mppl")
+      for (id <- randomTrace(11, 5000, 300)) assert(m3.access(id, 3) == r3.access(id, 3))
+    }
   }
 
   test("breadth-first buffer holds exactly ids < N and never changes") {

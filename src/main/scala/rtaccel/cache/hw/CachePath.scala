@@ -7,11 +7,11 @@ import rtaccel.config.{CacheParams, CachePolicy}
 import rtaccel.mc.{FetchBeat, FetchPath, FetchPathModule, McGeometry, PathReq}
 
 /** Geometry of one cache in front of a path. A line holds one request: a node, or a leaf of up to
-  * `entriesPerLine` (= MPPL) primitives, so lines = entries / entriesPerLine as in the trace model.
+  * `entriesPerLine` (= MPPL) primitives: CacheParams.lines, as in the trace model.
   */
 final case class CacheGeometry(c: CacheParams, entriesPerLine: Int, lineBeats: Int, strideBytes: Int) {
   require(c.entries > 0, "a cache path needs entries > 0")
-  val lines: Int = math.max(1, c.entries / entriesPerLine)
+  val lines: Int = c.lines(entriesPerLine)
   require(Integer.bitCount(lines) == 1, s"cache lines ($lines) must be a power of two")
   require(lines % c.ways == 0, s"cache ways (${c.ways}) must divide its lines ($lines)")
   val beatBits: Int = log2Ceil(lineBeats)
