@@ -384,14 +384,15 @@ $(FIXTURES): $(wildcard scenes/*.py golden/*.py) | venv
 	touch $@
 
 # The Python tests start a JVM for each model run of a few hundred rays: the C1 compiler alone and the serial
-# collector cut their CPU time by 30 % (231 -> 161 s user for golden/ and dse/, 199 -> 174 s wall).
+# collector cut their CPU time by 30 % (231 -> 161 s user for golden/ and dse/, 199 -> 174 s wall). They run on
+# every core (pytest-xdist): each is one process at a time, and they share no output folder.
 TEST_JVM = -XX:TieredStopAtLevel=1 -XX:+UseSerialGC
 test: deps yosys fixtures
 	@rm -rf build/test-reports; mkdir -p build/test-reports/python
 	@rc=0; \
 	$(TEST_PATH) RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=3; \
 	RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
-	  JAVA_TOOL_OPTIONS="$(TEST_JVM)" $(PY) -m pytest -q --junitxml=build/test-reports/python/pytest.xml || rc=3; \
+	  JAVA_TOOL_OPTIONS="$(TEST_JVM)" $(PY) -m pytest -q -n auto --junitxml=build/test-reports/python/pytest.xml || rc=3; \
 	$(PY) tools/count_tests.py build/test-reports; exit $$rc
 
 clean:
