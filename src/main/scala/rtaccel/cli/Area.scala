@@ -82,6 +82,12 @@ object Area {
     j("units") = ujson.Obj.from(units.map { case (u, r, n) =>
       u -> ujson.Obj.from(CostModel.resources.map(k => k -> ujson.Num(math.rint(r(k) * 10) / 10)) :+ ("instances" -> ujson.Num(n.toDouble))) })
     j("lut_levels") = ujson.Null // a synthesis property: FIDELITY=yosys reports it
+    // The model's clock: with PIPELINE the Stagers cut every datapath segment at the budget, so the budget is the
+    // model's deepest path (paper2017 on xc5v at auto: 6 levels predicted, 6 synthesized, docs/timing.md); the fixed
+    // stages' depth (PIPELINE=none) is the synthesis's to tell. A proxy's proxy: make timing routes the circuit.
+    val timing = Timing.forFamily(board.family)
+    j("lut_levels_model") = p.stageBudget.fold[ujson.Value](ujson.Null)(b => ujson.Num(b))
+    j("fmax_mhz_model") = p.stageBudget.fold[ujson.Value](ujson.Null)(b => ujson.Num(timing.fmaxMhz(b)))
     j("yosys_version") = m.yosysVersion; j("model_family") = m.family
     j("model_error") = m.json.obj.get("validation_summary").getOrElse(ujson.Null)
     j

@@ -117,6 +117,11 @@ class CostModelSpec extends AnyFunSuite {
     for (k <- Seq("config", "board", "family", "fidelity", "lut", "lutram", "ff", "dsp", "bram36", "fits", "first_overflow", "units",
         "lut_levels", "yosys_version", "wall_s")) assert(j.obj.contains(k), k)
     assert(j("fidelity").str == "model" && j("fits").bool && j("units")("TraversalUnit")("instances").num == 32)
+    // the model's clock: PIPELINE's budget through the family's rule; none for the fixed stages
+    val budget = rtaccel.config.Presets.paper2017.stageBudget.get
+    assert(j("lut_levels_model").num == budget && j("fmax_mhz_model").num == Timing.forFamily("xc5v").fmaxMhz(budget), ujson.write(j))
+    val (cn, on, en) = run(Area.main0, Flags.area, "--config", "paper2017", "--fidelity", "model", "--pipeline", "none", "--out", dir.resolve("n").toString)
+    assert(cn == 0 && last(on)("fmax_mhz_model").isNull && last(on)("lut_levels_model").isNull, en)
     val (c2, o2, e2) = run(Area.main0, Flags.area, "--config", "paper2017", "--fidelity", "model", "--board", "xc7a100t",
       "--out", dir.resolve("b").toString)
     assert(c2 == 3 && !last(o2)("fits").bool && e2.contains("does not fit xc7a100t"), e2)
