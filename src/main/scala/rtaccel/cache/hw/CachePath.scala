@@ -288,8 +288,8 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
     q.io.deq.ready := issue && hLast
     (issue, addr(h.line, hBeat), hOut, hFlight.last, ShiftRegister(hLast, 1 + slice), ShiftRegister(h.tag.get, 1 + slice))
   }
-  val rd = data.read(toRam(hitRead.fold(addr(head.line, beat)) { case (issue, a, _, _, _, _) => Mux(issue, a, addr(head.line, beat)) }),
-    toRamValid(readIssue || hitRead.fold(false.B)(_._1)))
+  val rdAddr = toRam(hitRead.fold(addr(head.line, beat)) { case (issue, a, _, _, _, _) => Mux(issue, a, addr(head.line, beat)) })
+  val rdEn = toRamValid(readIssue || hitRead.fold(false.B)(_._1))
 
   val missHead = ticketQ.deq.valid && !head.hit
   // RESP_ORDER=tagged: a fill starts only when no queued clean hit still reads its data line (write after read)
@@ -312,7 +312,18 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
       base += pm.sets * pm.ways
     }
   }
-  when(toRamValid(missBeat && head.fill)) { data.write(toRam(addr(head.line, beat)), toRam(Cat(io.memResp.bits.err, io.memResp.bits.data))) }
+  val wrEn = toRamValid(missBeat && head.fill)
+  val wrAddr = toRam(addr(head.line, beat))
+  val wrData = toRam(Cat(io.memResp.bits.err, io.memResp.bits.data))
+  // In order, a read (a hit's) and a write (a miss's fill) are never decided in the same cycle and both reach the RAM
+  // `slice` cycles later, so the RAM has one port, written explicitly: left to itself, firtool merged the two ports
+  // into one whose write mode was the ticket queue's unregistered `hit` (ECP5: the queue's LUT RAM read routed into
+  // every block's write enable, the MC's routed critical path). Tagged, a clean hit's read may meet a fill.
+  val rd = if (hitQ.isEmpty) data.readWrite(Mux(wrEn, wrAddr, rdAddr), wrData, rdEn || wrEn, wrEn)
+  else {
+    when(wrEn) { data.write(wrAddr, wrData) }
+    data.read(rdAddr, rdEn)
+  }
 
   outQ.io.enq.valid := inflight || (missBeat && !head.silent)
   outQ.io.enq.bits.data := Mux(inflight, rd(dataBits - 1, 0), io.memResp.bits.data)
