@@ -12,7 +12,7 @@ import rtaccel.formal.{EnvBounds, RandomHarness}
   */
 class BankCrossbarSimSpec extends AnyFlatSpec with RandomHarness {
   behavior of "BankCrossbar (randomized, against its monitor)"
-  val (cycles, seeds) = if (rtaccel.Regress.full) (40000, 1 to 3) else (5000, 1 to 1)
+  val (cycles, seeds) = if (rtaccel.Regress.full) (100000, 1 to 3) else (20000, 1 to 1)
 
   /** Drives every free input from `seed` for `n` cycles (the fault, if any, fires 1 cycle in 8); returns the
     * beats each cluster received. */

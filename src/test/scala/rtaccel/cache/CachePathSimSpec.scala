@@ -7,13 +7,13 @@ import rtaccel.config.{CacheParams, CachePolicy}
 import rtaccel.formal.{EnvBounds, RandomHarness}
 
 /** The cache path's proof harness (CachePathFormal: abstract memory, free requests and stalls, the monitor) run for
-  * thousands of random cycles in treadle. The proofs stop at 8–14 cycles, short of their answer bound (16 cycles
+  * thousands of random cycles. The proofs stop at 8–14 cycles, short of their answer bound (16 cycles
   * from acceptance), so "answered within the bound" and the faults that need long traces (a lost `last`, a starved
   * output) are exercised here (docs/formal.md, "Random runs of the harnesses").
   */
 class CachePathSimSpec extends AnyFlatSpec with RandomHarness {
   behavior of "CachePath (randomized, against the proof's monitor)"
-  val cycles = if (rtaccel.Regress.full) 30000 else 3000
+  val cycles = if (rtaccel.Regress.full) 100000 else 10000
   val live = EnvBounds(Some(1), Some(1))
   val bound = CachePathFormalSpec.answerBound
   val dm = CacheParams(4, 1, CachePolicy.Dm)

@@ -6,14 +6,15 @@ import org.scalatest.TestSuite
 import scala.util.Random
 
 /** Runs a formal harness (docs/formal.md: a Module whose inputs are all free, with a monitor of assertions) as a
-  * simulation in treadle, its free inputs drawn at random every cycle. Bounded proofs stop after a few cycles;
-  * random runs reach thousands, where liveness bounds ("answered within N cycles") and long interleavings are
-  * exercised. A failing assertion of the harness throws chiseltest's ChiselAssertionError.
+  * simulation (Verilator without C++ optimisation unless told: treadle took minutes on the cache harnesses), its
+  * free inputs drawn at random every cycle. Bounded proofs stop after a few cycles; random runs reach thousands,
+  * where liveness bounds ("answered within N cycles") and long interleavings are exercised. A failing assertion of
+  * the harness throws chiseltest's ChiselAssertionError.
   */
 trait RandomHarness extends ChiselScalatestTester { this: TestSuite =>
   /** `cycles` cycles of `gen` from `seed`: each cycle `drive` pokes every free input, then `observe` peeks.
-    * `annos`: the simulator (treadle unless given; Verilator for harnesses with arithmetic pipes). */
-  def runRandom[T <: Module](gen: => T, seed: Long, cycles: Int, annos: firrtl2.AnnotationSeq = Seq())(drive: (T, Random) => Unit)(
+    * `annos`: the simulator (rtaccel.TestSim.quick unless given). */
+  def runRandom[T <: Module](gen: => T, seed: Long, cycles: Int, annos: firrtl2.AnnotationSeq = rtaccel.TestSim.quick)(drive: (T, Random) => Unit)(
       observe: T => Unit = (_: T) => ()): Unit = {
     val rnd = new Random(seed)
     test(gen).withAnnotations(annos) { d =>

@@ -99,7 +99,7 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               respBufferBeats: Int = 0, maxCycles: Int = 30000, maxLevel: Int = 15,
               pick: (Random, IndexedSeq[Int]) => Int = (r, pool) => pool(r.nextInt(pool.length)),
               afterRun: (McHarness, Seq[Int], MemoryImage) => Unit = (_, _, _) => (),
-              annotations: firrtl2.AnnotationSeq = Seq(), respByPath: Boolean = false, tagged: Int = 0,
+              annotations: firrtl2.AnnotationSeq = rtaccel.TestSim.quick, respByPath: Boolean = false, tagged: Int = 0,
               tagForward: Boolean = false, memRetries: Int = -1, errorSticky: Boolean = true): Unit =
     it should name in {
       val axi = AxiParams(dataBits = dataBits)
