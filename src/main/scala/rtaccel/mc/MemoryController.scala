@@ -361,7 +361,7 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   // per path: two would let a later request overtake an earlier one, which the in-order response mux cannot wait out)
   val chosen = Wire(Decoupled(new Bundle { val req = g.memReq; val read = new InFlight }))
   val fresh = Wire(new InFlight)
-  fresh.path := arb.io.chosen; fresh.beats := arb.io.out.bits.beats; fresh.last := arb.io.out.bits.beats - 1.U
+  fresh.path := arb.io.chosen; fresh.beats := arb.io.out.bits.beats; fresh.last := DontCare // set at memOrder
   for (b <- fresh.base) b := VecInit(bufs.map(_.get.io.base))(arb.io.chosen)
   for (a <- fresh.addr) a := arb.io.out.bits.addr
   for (a <- fresh.attempt) a := 0.U
@@ -381,6 +381,9 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   issue.ready := splitter.io.in.ready && memOrder.io.enq.ready
   memOrder.io.enq.valid := issue.valid && splitter.io.in.ready
   memOrder.io.enq.bits := issue.bits.read
+  // the last beat's index from the slice's register: subtracted before it, after the credit compare and the
+  // arbiter's choice, it made the MC's routed critical path on ECP5 (16 elements into the slice)
+  memOrder.io.enq.bits.last := issue.bits.req.beats - 1.U
   io.axi.ar <> splitter.io.ar
 
   val rBeat = RegInit(0.U(g.beatsBits.W))
