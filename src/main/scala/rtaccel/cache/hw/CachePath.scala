@@ -266,14 +266,20 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
     * depth - 2 beats queued or landing. Sliced: depth - 1, and a DRAM beat waits while any in-order read flies, so
     * nothing else enters `q` between a decision and its landing (a full-rate stream of reads keeps its rate).
     */
-  def room(q: QueueIO[FetchBeat], flying: Seq[Bool]): Bool =
-    (q.count +& PopCount(flying)) <= (hw.cacheOutQueue - (if (slice == 0) 2 else 1)).U
+  private val roomLimit = hw.cacheOutQueue - (if (slice == 0) 2 else 1)
+  def room(q: QueueIO[FetchBeat], flying: Seq[Bool]): Bool = (q.count +& PopCount(flying)) <= roomLimit.U
 
   // a data RAM read issued (decided) in one cycle lands in outQ 1 + slice cycles later, only when outQ has room
   val readIssue = Wire(Bool())
   val readFlight = flight(readIssue)
   val inflight = readFlight.last
-  readIssue := ticketQ.deq.valid && head.hit && room(outQ.io, readFlight)
+  // outQ's entries and the reads flying to it, counted in a register: their sum from outQ's pointers and the flight
+  // (room) ran into the ticket queue's ready, the MC's routed critical path on ECP5. outQ takes only landing reads
+  // and DRAM beats; a landing read leaves the flight as it enters outQ.
+  val outOcc = RegInit(0.U(log2Ceil(hw.cacheOutQueue + 2).W))
+  outOcc := outOcc + readIssue.asUInt + (io.memResp.fire && !head.silent).asUInt - outQ.io.deq.fire.asUInt
+  assert(outOcc === outQ.io.count +& PopCount(readFlight), "CachePath: outOcc lost count of outQ and the reads flying to it")
+  readIssue := ticketQ.deq.valid && head.hit && outOcc <= roomLimit.U
   val inflightLast = ShiftRegister(lastBeat, 1 + slice)
   // RESP_ORDER=tagged: the clean hits' reads share the RAM's one read port; an in-order hit's read goes first
   val hitRead = hitQ.map { q =>
