@@ -61,8 +61,10 @@ venv: .venv/.stamp
 	.venv/bin/pip install -q --disable-pip-version-check -r requirements.txt
 	touch $@
 
-# The C++ compiler of the simulators Verilator builds itself (sim.VerilatorBuild.compiler): clang compiles a
-# model at -O0 in about 0.63 of g++'s time, and the test suites' simulators are mostly that compile.
+# The C++ compiler of the simulators Verilator builds (the test suites' through build.sbt, make simulate's through
+# sim.VerilatorBuild.compiler), chosen here once: clang compiles a model at -O0 in about 0.63 of g++'s time, and the
+# test suites' simulators are mostly that compile. RTACCEL_CXX=g++ keeps Verilator's default.
+export RTACCEL_CXX ?= $(shell command -v clang++-14 || command -v clang++ || echo g++)
 clang:
 	@command -v clang++-14 >/dev/null || command -v clang++ >/dev/null || { echo "[deps] installing clang-14 from apt"; \
 	  S=$$( [ "$$(id -u)" = 0 ] || echo sudo ); $$S apt-get update -qq && $$S apt-get install -y -qq clang-14 >/dev/null; }

@@ -35,14 +35,12 @@ object VerilatorBuild {
     * hundred rays spend far longer building than simulating, so they use it.
     */
   val quick: VerilatorBuild = VerilatorBuild("o0", Nil, Seq("-O0"), Some("-O0"))
-  /** The C++ compiler of the profiles Verilator builds itself (`optFast`): clang when installed (make deps installs
-    * clang-14 from apt), else Verilator's default g++. At -O0 clang compiles a platform's model in about 0.63 of
-    * g++'s time (the 8-TU all-formats circuit of PlatformSpec: 19.9 s against 31.5 s, one core), and the test
-    * suites' builds are mostly that compile. RTACCEL_CXX=<compiler> chooses another (g++ for the old builds).
+  /** The C++ compiler of the profiles Verilator builds itself (`optFast`): RTACCEL_CXX, which the Makefile sets
+    * (clang when make deps installed it), else Verilator's default g++. At -O0 clang compiles a platform's model in
+    * about 0.63 of g++'s time (the 8-TU all-formats circuit of PlatformSpec: 19.9 s against 31.5 s, one core), and
+    * the test suites' builds are mostly that compile.
     */
-  lazy val compiler: Option[String] = sys.env.get("RTACCEL_CXX").filter(_.nonEmpty).orElse(
-    Seq("clang++-14", "clang++").find(c => sys.env.getOrElse("PATH", "").split(java.io.File.pathSeparator)
-      .exists(d => java.nio.file.Files.isExecutable(java.nio.file.Paths.get(d, c)))))
+  lazy val compiler: Option[String] = sys.env.get("RTACCEL_CXX").filter(c => c.nonEmpty && c != "g++")
 
   /** Tried and measured (docs/platform.md), kept so that the comparison can be rerun with SIM_BUILD=<name>. */
   private val tried: Seq[VerilatorBuild] = Seq(
