@@ -496,8 +496,10 @@ object Fp {
     val expOf = (x: MulIn) => (x.expA.zext.pad(ew) + x.expB.zext.pad(ew)) - (2 * f.bias - fo.bias - 1).S
     var parts = if (tiled && pipe.dsp.registered) {
       // the blocks with their own operand and result registers (DspTile): the fields beside the products wait as long
-      // in flip-flops, and the exponent's sum goes in front of them (a register first when it would pass the budget)
-      val x = pipe.step(in, Depth.carry(ew))(v => v)
+      // in flip-flops, and the exponent's sum goes in front of them. The operands' classes always reach a register
+      // first (pipe.reg): on ECP5's 4-input LUTs a class (a 23-bit OR) and the special result combined from the
+      // classes were 7 levels in one cycle, TriPipe's routed critical path (into a product's NaN flag)
+      val x = pipe.reg(pipe.step(in, Depth.carry(ew))(v => v))
       val o = Wire(new MulParts(widths, ew))
       o.sign := pipe.beside(x.v.sign, DspTile.latency); o.toPos := pipe.beside(x.v.toPos, DspTile.latency)
       o.sp := pipe.beside(x.v.sp, DspTile.latency); o.exp := pipe.beside(expOf(x.v), DspTile.latency)
