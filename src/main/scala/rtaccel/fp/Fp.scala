@@ -343,19 +343,11 @@ object Fp {
     }
     // 2: align y; shifted-out bits are ORed into the LSB
     val al = pipe.step(sw, Depth.carry(f.expBits) + Depth.shift(dMax) + 1) { r =>
-      // No saturation at dMax: the shift takes d's low sBits bits (2^sBits > dMax) and a difference past them (`big`)
-      // gives what dMax would. Every shift from dMax on (dMax > the m + 1 + g bits shifted) leaves nothing and loses
-      // every bit of ySig (i + g < dMax for all i), so d and min(d, dMax) shift alike. Saturating first put a compare
-      // and a mux in front of the shifter: TriPipe's routed critical path on ECP5. (Unpipelined the saturation stays:
-      // ABC maps it smaller there, 406 against 424 LUTs on xc7.)
-      val pipelined = pipe.budget.isDefined
-      val sBits = log2Ceil(dMax + 1)
-      val big = if (pipelined && f.expBits > sBits) r.d(f.expBits - 1, sBits).orR else false.B
-      val dLow = if (pipelined) r.d.pad(sBits)(sBits - 1, 0) else Mux(gtConst(r.d, dMax), dMax.U, r.d)
-      val yAligned = Mux(big, 0.U, Cat(r.ySig, 0.U(g.W)) >> dLow)
-      // the bits shifted below the sticky position, by mask: bit i of ySig is lost when i + g < d (one LUT per
+      val dSat = Mux(gtConst(r.d, dMax), dMax.U, r.d)
+      val yAligned = Cat(r.ySig, 0.U(g.W)) >> dSat
+      // the bits shifted below the sticky position, by mask: bit i of ySig is lost when i + g < dSat (one LUT per
       // bit beside the shifter, whose low half then goes unused)
-      val yLost = big && r.ySig.orR || (0 to m).map(i => r.ySig(i) && gtConst(dLow, i + g)).reduce(_ || _)
+      val yLost = (0 to m).map(i => r.ySig(i) && gtConst(dSat, i + g)).reduce(_ || _)
       val o = Wire(new AddAligned(f))
       o.xSign := r.xSign; o.xExp := r.xExp; o.effSub := r.effSub; o.toPos := r.toPos; o.sp := r.sp; o.zeroSign := r.zeroSign
       o.yExt := Cat(0.U(1.W), yAligned | yLost)
