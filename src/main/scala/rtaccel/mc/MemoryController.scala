@@ -383,7 +383,9 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   memOrder.io.enq.bits := issue.bits.read
   // the last beat's index from the slice's register: subtracted before it, after the credit compare and the
   // arbiter's choice, it made the MC's routed critical path on ECP5 (16 elements into the slice)
-  memOrder.io.enq.bits.last := issue.bits.req.beats - 1.U
+  // (a re-read carries the index it was first issued with, the same value, from its queue: that field is read)
+  memOrder.io.enq.bits.last := issue.bits.read.attempt.fold(issue.bits.req.beats - 1.U)(a =>
+    Mux(a =/= 0.U, issue.bits.read.last, issue.bits.req.beats - 1.U))
   io.axi.ar <> splitter.io.ar
 
   val rBeat = RegInit(0.U(g.beatsBits.W))
