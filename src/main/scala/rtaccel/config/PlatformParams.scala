@@ -317,10 +317,10 @@ final case class PlatformParams(
     */
   def passSliceCycles: Int = if (stageBudget.isDefined && mcResponseBuffers) 3 else 0
   /** Cycles PIPELINE's registers in a cache path add to its hits: a lookup's decision waits a cycle before it enters
-    * the queues, and a data RAM read or write reaches the block RAMs a cycle after it is decided
-    * (rtaccel.cache.hw.CachePath).
+    * the queues, a data RAM read or write reaches the block RAMs a cycle after it is decided, and in request order
+    * the head ticket comes through a register slice (rtaccel.cache.hw.CachePath).
     */
-  def cacheSliceCycles: Int = if (stageBudget.isDefined) 2 else 0
+  def cacheSliceCycles: Int = if (stageBudget.isEmpty) 0 else if (respTagged) 2 else 3
   /** PIPELINE's budget: LUT levels at most between two registers of a datapath (None: the fixed stages). */
   lazy val stageBudget: Option[Int] = pipelining.budget(family, pipelineMhz.getOrElse(clockMhz))
   /** The board family's DSP block (boards/timing.json): with a budget, multipliers are cut into its products. */

@@ -36,9 +36,12 @@ object CachePathFormal {
     tus = if (tagged) 2 else 32, respByPath = tagged, respTagged = tagged,
     refs = RefFormat(nodeIdBits = 8, primIndexBits = 8, countBits = 0, levelBits = 0),
     hw = HwLimits(axiAddrBits = 16, cacheTickets = 2, cacheMissQueue = 2, cacheOutQueue = 3, cacheHitQueue = 2))
-  /** requests the path can hold unanswered: the lookup register (and PIPELINE's stage 2 after it), every ticket, one
-    * per beat of the output queue */
-  def maxOutstanding(p: PlatformParams): Int = 1 + (if (p.cacheSliceCycles > 0) 1 else 0) + p.hw.cacheTickets + p.hw.cacheOutQueue
+  /** requests the path can hold unanswered: the lookup register (and PIPELINE's stage 2 after it), every ticket (in
+    * request order with PIPELINE: one more in the head ticket's register), one per beat of the output queue */
+  def maxOutstanding(p: PlatformParams): Int = {
+    val sliced = p.cacheSliceCycles > 0
+    1 + (if (sliced) 1 else 0) + p.hw.cacheTickets + (if (sliced && !p.respTagged) 1 else 0) + p.hw.cacheOutQueue
+  }
 }
 
 /** CachePath (node geometry) between free requests of `lineBits`-bit line numbers, an AbstractMem and a free

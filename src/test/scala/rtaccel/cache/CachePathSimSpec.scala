@@ -44,8 +44,8 @@ class CachePathSimSpec extends AnyFlatSpec with RandomHarness {
     ("direct-mapped, in order", () => new CachePathFormal(dm, live, bound), true),
     ("2-way LRU, in order", () => new CachePathFormal(lru, live, bound), false),
     ("direct-mapped, one lookup per cycle (TAG_FORWARD=1)", () => new CachePathFormal(dm, live, bound, forward = true), false),
-    ("direct-mapped, tagged answers (2 requesters)", () => new CachePathFormal(dm, live, bound, tagged = true), true),
-    ("2-way LRU, tagged answers", () => new CachePathFormal(lru, live, bound, tagged = true), false))
+    ("direct-mapped, tagged answers (2 requesters)", () => new CachePathFormal(dm, live, CachePathFormalSpec.taggedBound, tagged = true), true),
+    ("2-way LRU, tagged answers", () => new CachePathFormal(lru, live, CachePathFormalSpec.taggedBound, tagged = true), false))
   for ((name, h, quick) <- configs if rtaccel.Regress.full || quick)
     it should s"answer each request once, with the memory's data, within $bound cycles over $cycles random cycles: $name" in {
       val answers = run(h(), 7, cycles)

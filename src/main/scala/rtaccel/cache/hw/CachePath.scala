@@ -76,6 +76,19 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val ticketScan = if (tagged) Some(Module(new ScanQueue(new Ticket, tickets)).suggestName("ticketQ")) else None
   private val ticketFifo = if (tagged) None else Some(Module(new Queue(new Ticket, tickets)).suggestName("ticketQ"))
   private def ticketQ: QueueIO[Ticket] = ticketScan.fold(ticketFifo.get.io)(_.io)
+  /** the tickets the data stage serves. In order with PIPELINE: the head ticket waits in a register, so it comes from
+    * flip-flops, not the queue's LUT RAM (read asynchronously into the output queue's write: the MC's routed
+    * critical path on ECP5); a hit waits a cycle more (PlatformParams.cacheSliceCycles), one ticket more is held.
+    * Tagged keeps the queue's own head: its clean-hit check scans every held fill, which the register would hide.
+    */
+  private val ticketOut: DecoupledIO[Ticket] = ticketFifo.filter(_ => slice > 0).fold(ticketQ.deq) { f =>
+    val out = Wire(Decoupled(new Ticket))
+    val held = RegInit(false.B); val bits = Reg(new Ticket)
+    f.io.deq.ready := !held || out.ready
+    when(f.io.deq.ready) { held := f.io.deq.valid; bits := f.io.deq.bits }
+    out.valid := held; out.bits := bits
+    out
+  }
   val missQ = Module(new Queue(g.memReq, hw.cacheMissQueue))
   io.memReq <> missQ.io.deq
 
@@ -249,7 +262,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   // each beat is stored with its error bit (MSB): a poisoned beat stays poisoned while it is cached
   val data = SyncReadMem(cg.dataLines << cg.beatBits, UInt((dataBits + 1).W))
   val outQ = Module(new Queue(g.respBeat, hw.cacheOutQueue))
-  val head = ticketQ.deq.bits
+  val head = ticketOut.bits
   val beat = RegInit(0.U(g.beatsBits.W))
   val lastBeat = beat === head.beats - 1.U
   def addr(line: UInt, b: UInt): UInt = if (cg.beatBits == 0) line else Cat(line, b(cg.beatBits - 1, 0))
@@ -279,7 +292,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val outOcc = RegInit(0.U(log2Ceil(hw.cacheOutQueue + 2).W))
   outOcc := outOcc + readIssue.asUInt + (io.memResp.fire && !head.silent).asUInt - outQ.io.deq.fire.asUInt
   assert(outOcc === outQ.io.count +& PopCount(readFlight), "CachePath: outOcc lost count of outQ and the reads flying to it")
-  readIssue := ticketQ.deq.valid && head.hit && outOcc <= roomLimit.U
+  readIssue := ticketOut.valid && head.hit && outOcc <= roomLimit.U
   val inflightLast = ShiftRegister(lastBeat, 1 + slice)
   // RESP_ORDER=tagged: the clean hits' reads share the RAM's one read port; an in-order hit's read goes first
   val hitRead = hitQ.map { q =>
@@ -297,7 +310,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val rdAddr = toRam(hitRead.fold(addr(head.line, beat)) { case (issue, a, _, _, _, _) => Mux(issue, a, addr(head.line, beat)) })
   val rdEn = toRamValid(readIssue || hitRead.fold(false.B)(_._1))
 
-  val missHead = ticketQ.deq.valid && !head.hit
+  val missHead = ticketOut.valid && !head.hit
   // RESP_ORDER=tagged: a fill starts only when no queued clean hit still reads its data line (write after read)
   val fillBlocked = hitQ.fold(false.B)(q => head.fill && beat === 0.U && q.io.held.map(e => e.valid && e.bits.line === head.line).reduce(_ || _))
   val canTakeMiss = missHead && !readFlight.reduce(_ || _) && (head.silent || outQ.io.enq.ready) && !fillBlocked
@@ -341,7 +354,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
 
   val beatDone = readIssue || missBeat
   when(beatDone) { beat := Mux(lastBeat, 0.U, beat + 1.U) }
-  ticketQ.deq.ready := beatDone && lastBeat
+  ticketOut.ready := beatDone && lastBeat
 
   hitRead match {
     case None => io.out <> outQ.io.deq
