@@ -154,6 +154,11 @@ object Fp {
     val leftCase = Bool()
   }
 
+  /** roundPack's first segment: NormMid with the leading-zero count in `sl`, not yet saturated at `room`. */
+  class NormLz(n: Int, w: Int, slW: Int, rW: Int) extends NormMid(n, w, slW, rW) {
+    val room = UInt(slW.W)
+  }
+
   /** roundPack after rounding: the m+2-bit significand (a carry into its top bit moves to the next binade). */
   class Rounded(val m: Int, val e: Int) extends Bundle {
     val sign = Bool()
@@ -165,7 +170,7 @@ object Fp {
   }
 
   /** Normalise, round (to nearest even, or directed by `toPos` when `directed`) and pack a [[RoundIn]] into fo,
-    * in four segments (shift amounts; shifts; rounding; packing) between which `pipe` may place registers.
+    * in five segments (leading zeros; the left shift amount; shifts; rounding; packing) between which `pipe` may place registers.
     * `exp` is a signed biased exponent that may lie outside the representable range (underflow goes to
     * subnormals/zero, overflow to inf). Hardware trimming for callers that know their range: `canUnderflow = false`
     * promises exp >= 1 (drops the right shifter), `maxLeftShift` bounds sig's leading zeros that need normalising
@@ -183,8 +188,8 @@ object Fp {
     // lowest), never the whole significand (docs/fp.md)
     val j = m + 3
     val lzLevels = Depth.lzc(if (maxLs >= n - 1) n else maxLs + 1)
-    // 1: leading zeros, the room left above exponent 1, and the right shift into the subnormal range
-    val mid = pipe.step(x, lzLevels + Depth.carry(w) + 1) { r =>
+    // 1: leading zeros and, beside them, the room left above exponent 1 and the right shift into the subnormal range
+    val lzd = pipe.step(x, lzLevels max (Depth.carry(w) + 1)) { r =>
       val sig = if (n > n0) Cat(r.sig, 0.U((n - n0).W)) else r.sig
       val ex = r.exp.pad(w)
       // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
@@ -193,13 +198,20 @@ object Fp {
       val lz = if (maxLs >= n - 1) lzc(sig) else lzc(Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
       val room = ex - 1.S
       val roomSat = Mux(gtConst(ex, n + 1), n.U, room.asUInt(log2Ceil(n + 1) - 1, 0)) // room > n
-      val sl = Mux(lz < roomSat, lz, roomSat)
       // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
       val rAmt = 1.S - ex
       val rSat = Mux(ltConst(ex, -j), (j + 1).U, rAmt.asUInt(log2Ceil(j + 2) - 1, 0)) // rAmt > j + 1
-      val o = Wire(new NormMid(n, w, sl.getWidth, rSat.getWidth))
-      o.sign := r.sign; o.exp := ex; o.sig := sig; o.sl := sl; o.rSat := rSat; o.leftCase := leftCase
+      val o = Wire(new NormLz(n, w, lz.getWidth max roomSat.getWidth, rSat.getWidth))
+      o.sign := r.sign; o.exp := ex; o.sig := sig; o.sl := lz; o.room := roomSat; o.rSat := rSat; o.leftCase := leftCase
       o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
+      o
+    }
+    // 1b: the left shift, the leading zeros saturated at the room (its own segment: after a wide count, the compare
+    // and its mux were the deepest step of a wide significand, WatertightPipe's routed critical path on ECP5)
+    val mid = pipe.step(lzd, Depth.carry(lzd.v.slW) + 1) { r =>
+      val o = Wire(new NormMid(n, w, r.slW, r.rW))
+      o.sign := r.sign; o.exp := r.exp; o.sig := r.sig; o.sl := Mux(r.sl < r.room, r.sl, r.room); o.rSat := r.rSat
+      o.leftCase := r.leftCase; o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
       o
     }
     // 2: the shifts, to the j bits the rounding reads: the top m+2 bits and one bit for the OR of the rest

@@ -160,7 +160,7 @@ object PlatformRun {
       s"-${build.name}" + (if (o.waves.isDefined) "-vcd" else "") + // HwLimits: in the digest
       (if (cached) Seq(p.nodeCache, p.primCache).map(c => s"-c${c.entries}.${c.ways}.${c.policy}").mkString + s"-mppl${p.mppl}-log$logCap" else "") +
       // MAX_STEPS is only the register's reset value, and the host writes the register before every batch
-      // (HostSession.configure): one simulator serves every limit
+      // (HostSession.configure): the simulator is built with the fit's reset value, so one serves every limit
       s"-p${paramsDigest(p.copy(maxSteps = None))}"
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
@@ -176,7 +176,7 @@ object PlatformRun {
     var result: Outcome = null
     val t0 = System.nanoTime()
     val modelWall = (t0 - tModel) / 1e9 // the reference model, the memory image and the input files
-    RawTester.test(new SimHarness(p, setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
+    RawTester.test(new SimHarness(p.copy(maxSteps = None), setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
       CachingAnnotation) ++ build.annotations ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
       dut.clock.setTimeout(0)
       dut.io.readIdx.poke(0.U)
