@@ -313,18 +313,24 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   private val buffered = respBufferBeats > 0
   private val retrying = p.memRetries > 0
   private val attemptBits = log2Ceil(p.memRetries + 1)
-  /** A read in flight: its path and beats; with response buffers the first slot it reserved; with MEM_RETRIES its
+  /** A read to issue: its path and beats; with response buffers the first slot it reserved; with MEM_RETRIES its
     * address (to read it again), its attempt (0 first) and the beats already delivered (`good`, re-reads skip them).
     */
-  class InFlight extends Bundle {
+  class Read extends Bundle {
     val path = UInt(1.W)
     val beats = UInt(g.beatsBits.W)
-    val last = UInt(g.beatsBits.W) // beats - 1, the last beat's index: the R side compares, it does not subtract
     val base = if (buffered) Some(UInt(log2Ceil(respBufferBeats).max(1).W)) else None
     val addr = if (retrying) Some(UInt(axi.addrBits.W)) else None
     val attempt = if (retrying) Some(UInt(attemptBits.W)) else None
     val good = if (retrying) Some(UInt(g.beatsBits.W)) else None
   }
+  /** A read issued, in the memory-order FIFO: with its last beat's index (beats - 1), which the R side compares and
+    * does not subtract. */
+  class InFlight extends Read {
+    val last = UInt(g.beatsBits.W)
+  }
+  /** the fields `to` shares with `from` (a Read's, in an InFlight or the other way round) */
+  private def copyShared(to: Read, from: Read): Unit = for ((n, d) <- to.elements if from.elements.contains(n)) d := from.elements(n)
   val memOrder = Module(new Queue(new InFlight, maxOutstanding))
   val splitter = Module(new BurstSplitter(g))
   // Each path's DRAM-response sink: straight to the path, or a credit-managed buffer in front of it.
@@ -355,13 +361,13 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
     }
   }
   // MEM_RETRIES: reads to issue again, ahead of every new read
-  val retryQ = if (retrying) Some(Module(new Queue(new InFlight, maxOutstanding + 4))) else None
+  val retryQ = if (retrying) Some(Module(new Queue(new Read, maxOutstanding + 4))) else None
   // with PIPELINE the arbiter's choice passes a register slice (arb.Slice) before the splitter and the memory-order
   // FIFO: their readies end there. After the arbiter, so DRAM order stays the order it chose (one slice, not one
   // per path: two would let a later request overtake an earlier one, which the in-order response mux cannot wait out)
-  val chosen = Wire(Decoupled(new Bundle { val req = g.memReq; val read = new InFlight }))
-  val fresh = Wire(new InFlight)
-  fresh.path := arb.io.chosen; fresh.beats := arb.io.out.bits.beats; fresh.last := DontCare // set at memOrder
+  val chosen = Wire(Decoupled(new Bundle { val req = g.memReq; val read = new Read }))
+  val fresh = Wire(new Read)
+  fresh.path := arb.io.chosen; fresh.beats := arb.io.out.bits.beats
   for (b <- fresh.base) b := VecInit(bufs.map(_.get.io.base))(arb.io.chosen)
   for (a <- fresh.addr) a := arb.io.out.bits.addr
   for (a <- fresh.attempt) a := 0.U
@@ -380,12 +386,10 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   splitter.io.in.bits := issue.bits.req
   issue.ready := splitter.io.in.ready && memOrder.io.enq.ready
   memOrder.io.enq.valid := issue.valid && splitter.io.in.ready
-  memOrder.io.enq.bits := issue.bits.read
+  copyShared(memOrder.io.enq.bits, issue.bits.read)
   // the last beat's index from the slice's register: subtracted before it, after the credit compare and the
   // arbiter's choice, it made the MC's routed critical path on ECP5 (16 elements into the slice)
-  // (a re-read carries the index it was first issued with, the same value, from its queue: that field is read)
-  memOrder.io.enq.bits.last := issue.bits.read.attempt.fold(issue.bits.req.beats - 1.U)(a =>
-    Mux(a =/= 0.U, issue.bits.read.last, issue.bits.req.beats - 1.U))
+  memOrder.io.enq.bits.last := issue.bits.req.beats - 1.U
   io.axi.ar <> splitter.io.ar
 
   val rBeat = RegInit(0.U(g.beatsBits.W))
@@ -408,9 +412,9 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
       when(failsNow) { failAt := rBeat }
       failed := Mux(rLast, false.B, failed || failsNow)
     }
-    val push = Wire(Valid(new InFlight))
+    val push = Wire(Valid(new Read))
     push.valid := io.axi.r.fire && rLast && (failed || failsNow)
-    push.bits := rHead
+    copyShared(push.bits, rHead)
     push.bits.attempt.get := rHead.attempt.get + 1.U
     push.bits.good.get := Mux(failed, failAt, rBeat)
     // through a register: the memory-order FIFO's read (its pointer, its RAM) does not run into the re-read queue's
