@@ -290,8 +290,14 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   // (room) ran into the ticket queue's ready, the MC's routed critical path on ECP5. outQ takes only landing reads
   // and DRAM beats; a landing read leaves the flight as it enters outQ.
   val outOcc = RegInit(0.U(log2Ceil(hw.cacheOutQueue + 2).W))
-  outOcc := outOcc + readIssue.asUInt + (io.memResp.fire && !head.silent).asUInt - outQ.io.deq.fire.asUInt
+  private val outOccNext = outOcc + readIssue.asUInt + (io.memResp.fire && !head.silent).asUInt - outQ.io.deq.fire.asUInt
+  outOcc := outOccNext
   assert(outOcc === outQ.io.count +& PopCount(readFlight), "CachePath: outOcc lost count of outQ and the reads flying to it")
+  // whether outQ has room for a DRAM beat, from a register: a DRAM beat is taken only while no read flies, when outOcc
+  // is outQ's count, so this is outQ's enq.ready then. The queue's pointers through its full compare into the ready
+  // for DRAM beats, and on to the MC's response slice, were the smallest platform's routed critical path on ECP5.
+  private val outRoom = RegNext(outOccNext < hw.cacheOutQueue.U, true.B)
+  assert(outRoom === (outOcc < hw.cacheOutQueue.U), "CachePath: outRoom out of step with outOcc")
   readIssue := ticketOut.valid && head.hit && outOcc <= roomLimit.U
   val inflightLast = ShiftRegister(lastBeat, 1 + slice)
   // RESP_ORDER=tagged: the clean hits' reads share the RAM's one read port; an in-order hit's read goes first
@@ -313,7 +319,8 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val missHead = ticketOut.valid && !head.hit
   // RESP_ORDER=tagged: a fill starts only when no queued clean hit still reads its data line (write after read)
   val fillBlocked = hitQ.fold(false.B)(q => head.fill && beat === 0.U && q.io.held.map(e => e.valid && e.bits.line === head.line).reduce(_ || _))
-  val canTakeMiss = missHead && !readFlight.reduce(_ || _) && (head.silent || outQ.io.enq.ready) && !fillBlocked
+  val canTakeMiss = missHead && !readFlight.reduce(_ || _) && (head.silent || outRoom) && !fillBlocked
+  when(canTakeMiss && !head.silent) { assert(outQ.io.enq.ready, "CachePath: outRoom said room where outQ had none") }
   io.memResp.ready := canTakeMiss
   val missBeat = io.memResp.fire
   // a fill's error bits, gathered over its beats, mark its data line at its last beat (PoisonMarks)
