@@ -318,7 +318,7 @@ final case class PlatformParams(
   def passSliceCycles: Int = if (stageBudget.isDefined && mcResponseBuffers) 3 else 0
   /** Cycles PIPELINE's registers in a cache path add to its hits: a lookup's decision waits a cycle before it enters
     * the queues, a data RAM read or write reaches the block RAMs a cycle after it is decided, and in request order
-    * the head ticket comes through a register slice (rtaccel.cache.hw.CachePath).
+    * the head ticket waits in a register (rtaccel.cache.hw.CachePath).
     */
   def cacheSliceCycles: Int = if (stageBudget.isEmpty) 0 else if (respTagged) 2 else 3
   /** PIPELINE's budget: LUT levels at most between two registers of a datapath (None: the fixed stages). */
