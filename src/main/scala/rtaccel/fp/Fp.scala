@@ -148,10 +148,13 @@ object Fp {
     * the left shift, the saturated right shift and which of the two applies. After the shifts the value is a RoundIn
     * again, its exponent the output's (>= 1) and its significand's hidden bit on top unless that exponent is 1.
     */
-  class NormMid(n: Int, w: Int, val slW: Int, val rW: Int) extends RoundIn(n, w) {
+  class NormMid(n: Int, w: Int, val slW: Int, val rW: Int, val maskW: Int = 0) extends RoundIn(n, w) {
     val sl = UInt(slW.W)
     val rSat = UInt(rW.W)
     val leftCase = Bool()
+    /** Bit i set when the right shift moves bit i of the rounding's window out (i < rSat): the sticky bit is then an
+      * AND-OR of the window and this mask, not an OR over the shifter's outputs. */
+    val rMask = Option.when(maskW > 0)(UInt(maskW.W))
   }
 
   /** roundPack's first segment: NormMid with the leading-zero count in `sl`, not yet saturated at `room`. */
@@ -209,9 +212,10 @@ object Fp {
     // 1b: the left shift, the leading zeros saturated at the room (its own segment: after a wide count, the compare
     // and its mux were the deepest step of a wide significand, WatertightPipe's routed critical path on ECP5)
     val mid = pipe.step(lzd, Depth.carry(lzd.v.slW) + 1) { r =>
-      val o = Wire(new NormMid(n, w, r.slW, r.rW))
+      val o = Wire(new NormMid(n, w, r.slW, r.rW, if (canUnderflow) j else 0))
       o.sign := r.sign; o.exp := r.exp; o.sig := r.sig; o.sl := Mux(r.sl < r.room, r.sl, r.room); o.rSat := r.rSat
       o.leftCase := r.leftCase; o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
+      for (mk <- o.rMask) mk := VecInit((0 until j).map(i => r.rSat > i.U)).asUInt
       o
     }
     // 2: the shifts, to the j bits the rounding reads: the top m+2 bits and one bit for the OR of the rest
@@ -225,7 +229,9 @@ object Fp {
         val t = if (n > j) Cat(r.sig(n - 1, n - j + 1), r.sig(n - j, 0).orR) else r.sig
         val wideR = Cat(t, 0.U((j + 1).W)) >> r.rSat
         o.sig := Mux(r.leftCase, leftSig, wideR(2 * j, j + 1))
-        o.sticky := r.sticky || (!r.leftCase && wideR(j, 0).orR)
+        // the bits it moves out, by the mask (bit i of t leaves the window when i < rSat): after the shifter, an OR of
+        // its outputs was WatertightPipe's routed critical path on ECP5
+        o.sticky := r.sticky || (!r.leftCase && (t & r.rMask.get).orR)
       } else { o.sig := leftSig; o.sticky := r.sticky }
       o.exp := Mux(r.leftCase, r.exp - r.sl.zext, 1.S) // >= 1; with sig's MSB clear only when it is 1 (subnormal)
       o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp
