@@ -137,8 +137,10 @@ object CostModel {
       Map("ff" -> perUnit.map { case (u, c) => u -> (if (srl) c.bits - c.chainBits else c.bits).toDouble },
         "lutram" -> perUnit.map { case (u, c) => u -> (if (srl) c.chainLuts else 0L).toDouble })
     }
-    def total(p: PlatformParams, fam: String): Map[String, Double] =
-      resources.map(r => r -> predict(p, fam).map(_._2(r)).sum).toMap
+    def total(p: PlatformParams, fam: String): Map[String, Double] = {
+      val units = predict(p, fam) // once: its pipeline terms elaborate the pipes (PipeLatencies)
+      resources.map(r => r -> units.map(_._2(r)).sum).toMap
+    }
   }
 
   val defaultPath: Path = Paths.get("boards/cost-model.json")

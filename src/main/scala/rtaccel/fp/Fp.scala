@@ -226,12 +226,11 @@ object Fp {
       val o = Wire(new RoundIn(j, w))
       if (canUnderflow) {
         // right: shifted by j + 1 or more, everything lands below the window: the saturation above
-        val t = if (n > j) Cat(r.sig(n - 1, n - j + 1), r.sig(n - j, 0).orR) else r.sig
-        val wideR = Cat(t, 0.U((j + 1).W)) >> r.rSat
-        o.sig := Mux(r.leftCase, leftSig, wideR(2 * j, j + 1))
-        // the bits it moves out, by the mask (bit i of t leaves the window when i < rSat): after the shifter, an OR of
-        // its outputs was WatertightPipe's routed critical path on ECP5
-        o.sticky := r.sticky || (!r.leftCase && (t & r.rMask.get).orR)
+        val win = if (n > j) Cat(r.sig(n - 1, n - j + 1), r.sig(n - j, 0).orR) else r.sig
+        o.sig := Mux(r.leftCase, leftSig, win >> r.rSat)
+        // the bits it moves out, by the mask (bit i of win leaves when i < rSat): after the shifter, an OR of its
+        // outputs was WatertightPipe's routed critical path on ECP5
+        o.sticky := r.sticky || (!r.leftCase && (win & r.rMask.get).orR)
       } else { o.sig := leftSig; o.sticky := r.sticky }
       o.exp := Mux(r.leftCase, r.exp - r.sl.zext, 1.S) // >= 1; with sig's MSB clear only when it is 1 (subnormal)
       o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp

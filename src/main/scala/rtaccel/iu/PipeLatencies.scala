@@ -19,8 +19,9 @@ object PipeLatencies {
     * Inside the board top's own elaboration, take them from its instances instead (RtAccelTop does).
     */
   def of(p: PlatformParams): PipeLatencies = {
-    // with a budget, the family's DSP tile (its latency) and delay chains (LUT RAM or flip-flops) shape the pipes too
-    val key = s"${p.stageBudget} ${p.m} ${p.tus} ${p.boxFormat} ${p.triTest} ${p.triFormat} ${p.divStages} ${p.boxSlackUlps}" +
+    // with a budget, the family's DSP tile (its latency) and delay chains (LUT RAM or flip-flops) shape the pipes too;
+    // the TUs only through the width of the TU tag the pipes carry (make max-tus asks many TU counts)
+    val key = s"${p.stageBudget} ${p.m} ${p.tuBits} ${p.boxFormat} ${p.triTest} ${p.triFormat} ${p.divStages} ${p.boxSlackUlps}" +
       p.stageBudget.fold("")(_ => s" ${p.dspShape} ${p.delayRamCycles}")
     memo.getOrElseUpdate(key, {
       val annos = new chisel3.stage.ChiselGeneratorAnnotation(() => new Probe(p)).elaborate

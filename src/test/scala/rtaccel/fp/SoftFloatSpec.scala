@@ -8,7 +8,8 @@ import org.scalatest.matchers.should.Matchers
   */
 class SoftFloatSpec extends AnyFlatSpec with Matchers {
   private val fp32 = FpFormat.fp32
-  private val nRandom = 10000000
+  // make test: two million (one million per thread, the coverage's sample); make regress ten million
+  private val nRandom = if (rtaccel.Regress.full) 10000000 else 2000000
 
   "SoftFloat(fp32)" should "equal Java float on every pair of edge values" in {
     val g = new FpTestGen(fp32, 1)

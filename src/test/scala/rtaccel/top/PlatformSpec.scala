@@ -13,7 +13,8 @@ import rtaccel.scene.{Rays, Scene}
   * TUs {1,2,4,8,32} x M {2,4,8} x MPPL {1,2,4,8,16}. The paper's fixed 32-bit reference layout is used so
   * that MPPL changes only the memory image and a compiled simulator serves every MPPL. Every run builds the `quick`
   * Verilator profile (no C++ optimisation): a few hundred rays simulate in seconds, the build is the test's time.
-  * make test keeps one case per feature (the formats all in one circuit); make regress runs each on its own too.
+  * make test keeps one case per feature (the formats all in one circuit) at 4 TUs at most, since the C++ build grows
+  * with the TUs and is the case's time; make regress runs each on its own too, at 8 TUs where make test runs 4.
   */
 class PlatformSpec extends AnyFunSuite {
   private val full = rtaccel.Regress.full
@@ -162,7 +163,8 @@ class PlatformSpec extends AnyFunSuite {
   // Short stack with restart in the TUs: the RTL's fetches (counted and replayed through the caches) and hits
   // equal model.traceShort's, and its hits the full stack's.
   // make test: the LRP node and LRU primitive caches under jitter and backpressure in the same circuit
-  for ((tus, ring, node, prim, jitter, stall) <- Seq((8, 1, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 37, 40)) ++
+  // (make test at 4 TUs, make regress 8: the build is the test's time and grows with the TUs)
+  for ((tus, ring, node, prim, jitter, stall) <- Seq((if (full) 8 else 4, 1, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 37, 40)) ++
       (if (full) Seq((1, 2, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 0, 0)) else Nil))
     test(s"short stack of $ring with restart at $tus TU(s) with caches (node ${node.entries} ${node.policy}, prim ${prim.entries} ${prim.policy}, jitter $jitter, stall $stall): bit-exact, counts equal the model, hits equal the full stack's") {
       val sh = runOne(tus, 4, 4, rays, scene, jitter, stall, node = node, prim = prim, short = ring); val j = sh.json
@@ -270,16 +272,17 @@ class PlatformSpec extends AnyFunSuite {
 
   // Every format at once in one circuit (make test's case of each): bf16 boxes, the watertight test and its slack,
   // q8 nodes through NodeDecode, packed leaves through LeafAssembler, both caches, DRAM jitter and host backpressure.
-  test("all formats in one circuit (bf16, watertight, q8, packed) at 8 TUs with both caches: bit-exact, counts equal the model") {
-    val r = runOne(8, 4, 4, rays, scene, jitter = 29, stall = 30, node = CacheParams(64, 2, CachePolicy.Lru),
+  private val formatTus = if (full) 8 else 4
+  test(s"all formats in one circuit (bf16, watertight, q8, packed) at $formatTus TUs with both caches: bit-exact, counts equal the model") {
+    val r = runOne(formatTus, 4, 4, rays, scene, jitter = 29, stall = 30, node = CacheParams(64, 2, CachePolicy.Lru),
       prim = CacheParams(32, 2, CachePolicy.Lru), box = rtaccel.fp.FpFormat.parse("bf16"), tri = TriTest.Watertight,
       packed = true, nodeQuant = 8)
     val n = r.json("numerics")
     assert(n("box_format").str == "bf16" && n("tri_test").str == "watertight" && n("node_format").str == "q8" &&
       n("prim_format").str == "packed", ujson.write(n))
-    checkLeafBytes(r.json, Presets.paper2017.copy(tus = 8, boxFormat = rtaccel.fp.FpFormat.parse("bf16"), triTest = TriTest.Watertight,
+    checkLeafBytes(r.json, Presets.paper2017.copy(tus = formatTus, boxFormat = rtaccel.fp.FpFormat.parse("bf16"), triTest = TriTest.Watertight,
       primPacked = true, nodeQuantBits = 8))
-    val (fp, fullNodes) = modelRun(Presets.paper2017.copy(tus = 8))
+    val (fp, fullNodes) = modelRun(Presets.paper2017.copy(tus = formatTus))
     info(f"node fetches: all formats ${r.json("node_requests").num}%.0f, fp32 full $fullNodes")
     val agree = (0 until rays.count).count(i => r.hits.prim(i) == fp.prim(i))
     assert(agree > rays.count * 9 / 10, s"only $agree of ${rays.count} rays hit fp32 Möller–Trumbore's primitive")
@@ -312,7 +315,7 @@ class PlatformSpec extends AnyFunSuite {
   // order. make test: IUS=2 over MEM_CHANNELS=2 with caches under jitter and backpressure for path (the clusters and
   // channels case of make test too); tagged in the NODE_BANKS case below (with RAY_STORE=1).
   private val (path, tagged) = (RespOrder.Path, RespOrder.Tagged)
-  private val pathCases = Seq((path, 2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
+  private val pathCases = Seq((path, 2, 2, if (full) 8 else 4, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
     (if (!full) Nil else Seq((tagged, 1, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30),(path, 1, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
       (path, 2, 1, 4, CacheParams(), CacheParams(), 0, 0), (tagged, 1, 1, 4, CacheParams(), CacheParams(), 17, 20),
       (tagged, 2, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25),
@@ -353,7 +356,7 @@ class PlatformSpec extends AnyFunSuite {
   // re-read and the run stays bit-exact with the fault-free model, then sticky on the same circuit, where exactly the
   // model's rays are flagged: re-reads and poison refetches under two clusters, banks and tagged answers.
   private val bankErrorRate = 0.003
-  private val bankCases = Seq((2, 2, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true, !full)) ++
+  private val bankCases = Seq((2, 2, 1, if (full) 8 else 4, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true, !full)) ++
     (if (!full) Nil else Seq((2, 4, 1, 8, CacheParams(128, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(16, 2, CachePolicy.Lru), 23, 30, false, false),
       (4, 1, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 0, 0, true, false),
       (2, 2, 2, 4, CacheParams(64, 2, CachePolicy.Lru), CacheParams(32, 1, CachePolicy.Dm), 17, 20, false, false)))
