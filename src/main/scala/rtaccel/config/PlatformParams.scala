@@ -326,8 +326,10 @@ final case class PlatformParams(
   /** The board family's DSP block (boards/timing.json): with a budget, multipliers are cut into its products. */
   lazy val dspShape: rtaccel.fp.DspShape = rtaccel.area.Timing.forFamily(family).dsp
   /** A register placer for one module's datapath at this budget (each module takes its own). */
-  def pipe: rtaccel.fp.Stager =
-    if (stageBudget.isEmpty) new rtaccel.fp.Stager(None) else new rtaccel.fp.Stager(stageBudget, dspShape, delayRamCycles)
+  def pipe: rtaccel.fp.Stager = pipes.pipe
+  /** The view the IU's arithmetic pipes take: only what shapes them. */
+  lazy val pipes: rtaccel.iu.PipeParams = rtaccel.iu.PipeParams(m, tuBits, boxFormat, boxSlackUlps, triTest, triFormat, divStages,
+    stageBudget, stageBudget.map(_ => dspShape), stageBudget.flatMap(_ => delayRamCycles))
   /** With a budget, on a family without shift-register LUTs (boards/timing.json `delay_ram_cycles`): delays of at
     * least this many cycles in LUT RAM (fp.Stager.chain). */
   lazy val delayRamCycles: Option[Int] = rtaccel.area.Timing.forFamily(family).delayRamCycles

@@ -2,10 +2,9 @@ package rtaccel.iu
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.PlatformParams
 import rtaccel.fp.{Depth, Fp, FpFormat, Timed}
 
-class BoxJob(p: PlatformParams) extends Bundle {
+class BoxJob(p: PipeParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
   val ray = new RayData
   val tmax = UInt(32.W)
@@ -14,7 +13,7 @@ class BoxJob(p: PlatformParams) extends Bundle {
 }
 
 /** What a box result needs of its job besides the arithmetic. */
-class BoxMeta(p: PlatformParams) extends Bundle {
+class BoxMeta(p: PipeParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
   val err = Bool()
   val cref = Vec(p.m, UInt(32.W))
@@ -28,7 +27,7 @@ class BoxMeta(p: PlatformParams) extends Bundle {
   * Each of the four ends in a register; PIPELINE adds registers inside them (fp.Stager), so the latency is
   * `latency` (4 with PIPELINE=none).
   */
-class BoxPipe(p: PlatformParams) extends Module {
+class BoxPipe(p: PipeParams) extends Module {
   val io = IO(new Bundle {
     val in = Flipped(Valid(new BoxJob(p)))
     val out = Valid(new BoxResult(p))

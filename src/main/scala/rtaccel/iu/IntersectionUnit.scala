@@ -23,8 +23,8 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   private val maxOutstanding = p.hw.iuOutstanding
   val io = IO(new Bundle {
     val req = Flipped(Vec(requesters, Decoupled(new IuReq(p))))
-    val box = Valid(new BoxResult(p))
-    val tri = Valid(new TriResult(p))
+    val box = Valid(new BoxResult(p.pipes))
+    val tri = Valid(new TriResult(p.pipes))
     val mem = new Bundle {
       val req = Decoupled(new FetchReq(p.respTagBits))
       val resp = Flipped(Decoupled(new FetchBeat(beatBits, p.respTagBits))) // RESP_ORDER=path: node beats only
@@ -158,7 +158,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     node.words := VecInit(words.take(nodeWords))
     node.err := unitErr
     val box = NodeDecode.toBoxJob(p, unitDone && !isLeaf, node)
-    val tri = Wire(Valid(new TriJob(p)))
+    val tri = Wire(Valid(new TriJob(p.pipes)))
     tri.valid := unitDone && isLeaf
     tri.bits.tu := job.tu
     tri.bits.ray := rayOf(job)
@@ -199,12 +199,12 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   // throughput model adds: PlatformParams.accessSliceCycles)
   val boxIn = rtaccel.arb.Slice.late(p, boxJob)
   val triJob = rtaccel.arb.Slice.late(p, triJob0)
-  val boxPipe = Module(new BoxPipe(p))
+  val boxPipe = Module(new BoxPipe(p.pipes))
   boxPipe.io.in := boxIn
   // TRI_TEST: both pipes take the same job and give the same result, at their own latencies
   val (triIn, triOut, triLatency) = p.triTest match {
-    case TriTest.Mt => val t = Module(new TriPipe(p)); (t.io.in, t.io.out, t.latency)
-    case TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.io.in, t.io.out, t.latency)
+    case TriTest.Mt => val t = Module(new TriPipe(p.pipes)); (t.io.in, t.io.out, t.latency)
+    case TriTest.Watertight => val t = Module(new WatertightPipe(p.pipes)); (t.io.in, t.io.out, t.latency)
   }
   triIn := triJob
   io.box := boxPipe.io.out

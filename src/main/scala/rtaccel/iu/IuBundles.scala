@@ -36,7 +36,7 @@ object RayWrite {
 }
 
 /** Slab-test results for the M children of a node, in slot order. */
-class BoxResult(p: PlatformParams) extends Bundle {
+class BoxResult(p: PipeParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
   val hit = Vec(p.m, Bool())
   val tnear = Vec(p.m, UInt(32.W))
@@ -48,7 +48,7 @@ class BoxResult(p: PlatformParams) extends Bundle {
 }
 
 /** Möller–Trumbore result for one primitive of a leaf; `last` marks the leaf's final primitive. */
-class TriResult(p: PlatformParams) extends Bundle {
+class TriResult(p: PipeParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
   val hit = Bool()
   val t = UInt(32.W)

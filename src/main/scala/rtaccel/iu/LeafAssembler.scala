@@ -34,7 +34,7 @@ class LeafBeat(p: PlatformParams, beatBits: Int) extends Bundle {
 class LeafAssembler(p: PlatformParams, beatBits: Int) extends Module {
   val io = IO(new Bundle {
     val in = Flipped(Decoupled(new LeafBeat(p, beatBits)))
-    val out = Valid(new TriJob(p))
+    val out = Valid(new TriJob(p.pipes))
     val leafTaken = Output(Bool()) // `in` took the final beat of a leaf
   })
   private val rec = Numerics.packedPrimBytes / 4

@@ -24,7 +24,7 @@ class NodeDecode(p: PlatformParams) extends Module {
   require(p.nodeQuantBits > 0, "NodeDecode is the quantized node format's stage")
   val io = IO(new Bundle {
     val in = Flipped(Valid(new NodeJob(p)))
-    val out = Valid(new BoxJob(p))
+    val out = Valid(new BoxJob(p.pipes))
   })
   private val f = FpFormat.fp32
   private val lay = new QNodeLayout(p.m, p.nodeQuantBits)
@@ -40,7 +40,7 @@ class NodeDecode(p: PlatformParams) extends Module {
   val j1 = RegNext(in)
   val v1 = RegNext(io.in.valid, false.B)
 
-  val out = Wire(new BoxJob(p))
+  val out = Wire(new BoxJob(p.pipes))
   out.tu := j1.tu; out.ray := j1.ray; out.tmax := j1.tmax; out.err := j1.err
   for (c <- 0 until p.m) {
     for (k <- 0 until 6) out.words(7 * c + k) := Fp.add(f, origin1(k % 3), scaled(6 * c + k))
@@ -53,7 +53,7 @@ class NodeDecode(p: PlatformParams) extends Module {
 object NodeDecode {
   /** The box job of a node collected as `job`: its words as they are for full nodes, through NodeDecode for q<k>. */
   def toBoxJob(p: PlatformParams, valid: Bool, job: NodeJob): Valid[BoxJob] = {
-    val out = Wire(Valid(new BoxJob(p)))
+    val out = Wire(Valid(new BoxJob(p.pipes)))
     if (p.nodeQuantBits == 0) {
       out.valid := valid
       out.bits.tu := job.tu; out.bits.ray := job.ray; out.bits.tmax := job.tmax; out.bits.err := job.err

@@ -13,18 +13,17 @@ import rtaccel.fp.{FpDivPipe, FpFormat, Stager}
 final case class PipeLatencies(box: Int, tri: Int, prep: Int, census: Seq[Stager.Census] = Nil)
 
 object PipeLatencies {
-  private val memo = scala.collection.concurrent.TrieMap[String, PipeLatencies]()
+  private val memo = scala.collection.concurrent.TrieMap[PipeParams, PipeLatencies]()
 
-  /** The latencies of p's pipes, from an elaboration of the pipes alone (seconds; memoized per circuit-shaping key).
+  /** The latencies of p's pipes, from an elaboration of the pipes alone (seconds; memoized on the pipes' view, PipeParams).
     * Inside the board top's own elaboration, take them from its instances instead (RtAccelTop does).
     */
   def of(p: PlatformParams): PipeLatencies = {
-    // with a budget, the family's DSP tile (its latency) and delay chains (LUT RAM or flip-flops) shape the pipes too;
-    // the TUs only through the width of the TU tag the pipes carry (make max-tus asks many TU counts)
-    val key = s"${p.stageBudget} ${p.m} ${p.tuBits} ${p.boxFormat} ${p.triTest} ${p.triFormat} ${p.divStages} ${p.boxSlackUlps}" +
-      p.stageBudget.fold("")(_ => s" ${p.dspShape} ${p.delayRamCycles}")
+    // the pipes' own view (PipeParams): the TUs enter only through the width of the TU tag they carry, so make
+    // max-tus elaborates once per width, not per TU count
+    val key = p.pipes
     memo.getOrElseUpdate(key, {
-      val annos = new chisel3.stage.ChiselGeneratorAnnotation(() => new Probe(p)).elaborate
+      val annos = new chisel3.stage.ChiselGeneratorAnnotation(() => new Probe(key)).elaborate
       annos.collectFirst { case d: chisel3.stage.DesignAnnotation[_] => d.design.asInstanceOf[Probe].latencies }.get
     })
   }
@@ -38,7 +37,7 @@ object PipeLatencies {
   }
 
   /** The three pipes side by side, inputs left open: elaborated for their latencies only, never emitted. */
-  private class Probe(p: PlatformParams) extends Module {
+  private class Probe(p: PipeParams) extends Module {
     private val box = Module(new BoxPipe(p))
     private val (tri, triBits) = p.triTest match {
       case rtaccel.config.TriTest.Mt => val t = Module(new TriPipe(p)); (t.latency, t.census)

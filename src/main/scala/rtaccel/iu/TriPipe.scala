@@ -2,10 +2,9 @@ package rtaccel.iu
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.PlatformParams
 import rtaccel.fp.{Depth, Fp, FpDivPipe, FpFormat, Timed}
 
-class TriJob(p: PlatformParams) extends Bundle {
+class TriJob(p: PipeParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
   val ray = new RayData
   val tmax = UInt(32.W)
@@ -15,14 +14,14 @@ class TriJob(p: PlatformParams) extends Bundle {
 }
 
 /** What a triangle result needs of its job besides the arithmetic, carried down the pipe (not the whole job). */
-class TriMeta(p: PlatformParams) extends Bundle {
+class TriMeta(p: PipeParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
   val prim = UInt(32.W)
   val last = Bool()
   val err = Bool()
 }
 object TriMeta {
-  def apply(p: PlatformParams, j: TriJob): TriMeta = {
+  def apply(p: PipeParams, j: TriJob): TriMeta = {
     val m = Wire(new TriMeta(p)); m.tu := j.tu; m.prim := j.words(9); m.last := j.last; m.err := j.err; m
   }
 }
@@ -41,7 +40,7 @@ object TriMeta {
   * in it, and t, u, v are rounded to fp32 (nearest even) for the result in the last stage, beside the conditions:
   * the same stages in every format; with fp32 the widening and rounding are wires.
   */
-class TriPipe(p: PlatformParams) extends Module {
+class TriPipe(p: PipeParams) extends Module {
   val io = IO(new Bundle {
     val in = Flipped(Valid(new TriJob(p)))
     val out = Valid(new TriResult(p))
@@ -110,7 +109,7 @@ object TriPipe {
   /** What both triangle pipes end in: the hit and t, u, v (fp32) with the job's fields, read when the last of them is
     * ready, into the result register.
     */
-  private[iu] def finish(p: PlatformParams, pipe: rtaccel.fp.Stager, job: Timed[TriJob], hit: Timed[Bool], tuv: Seq[Timed[UInt]]): Timed[TriResult] = {
+  private[iu] def finish(p: PipeParams, pipe: rtaccel.fp.Stager, job: Timed[TriJob], hit: Timed[Bool], tuv: Seq[Timed[UInt]]): Timed[TriResult] = {
     val (tDone, dDone) = pipe.join(Seq(hit) ++ tuv: _*)
     def at[T <: Data](x: Timed[T]) = pipe.delayTo(x, tDone).v
     val j = at(job.map(0)(TriMeta(p, _)))

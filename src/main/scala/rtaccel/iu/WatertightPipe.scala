@@ -2,7 +2,6 @@ package rtaccel.iu
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.PlatformParams
 import rtaccel.fp.{Depth, Fp, FpDivPipe, FpFormat, Timed}
 
 /** The watertight ray-triangle test (TRI_TEST=watertight; Woop, Benthin and Wald, JCGT 2013), one primitive per
@@ -16,7 +15,7 @@ import rtaccel.fp.{Depth, Fp, FpDivPipe, FpFormat, Timed}
   * The per-ray shear is recomputed per primitive instead of being stored with the ray, so the pipe takes the same
   * job as Möller–Trumbore's: two multipliers and a few comparators instead of a wider ray in every IU request.
   */
-class WatertightPipe(p: PlatformParams) extends Module {
+class WatertightPipe(p: PipeParams) extends Module {
   val io = IO(new Bundle {
     val in = Flipped(Valid(new TriJob(p)))
     val out = Valid(new TriResult(p))

@@ -45,8 +45,8 @@ class TraversalUnit(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
     val ray = Flipped(Decoupled(new TuRay(p)))
     val req = Decoupled(new IuReq(p))
-    val box = Flipped(Valid(new BoxResult(p)))
-    val tri = Flipped(Valid(new TriResult(p)))
+    val box = Flipped(Valid(new BoxResult(p.pipes)))
+    val tri = Flipped(Valid(new TriResult(p.pipes)))
     val result = Decoupled(new TuResult)
     val busy = Output(Bool())
     val index = Input(UInt(p.tuBits.W)) // a port, not a parameter, so that every TU is one module

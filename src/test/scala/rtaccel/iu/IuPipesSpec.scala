@@ -55,7 +55,7 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}, PIPELINE=${pl.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
     val pb = p.copy(boxFormat = bf, triTest = tt, pipelining = pl)
     val outward = if (bf == FpFormat.fp32) None else Some(new RayBoxOutward(bf, pb.boxSlackUlps))
-    test(new BoxPipe(pb)).withAnnotations(rtaccel.TestSim.quick) { dut =>
+    test(new BoxPipe(pb.pipes)).withAnnotations(rtaccel.TestSim.quick) { dut =>
       val lat = dut.latency
       if (pl == fixed) assert(lat == 4, s"PIPELINE=none keeps the four stages (latency $lat)")
       else assert(lat > 4, s"PIPELINE=${pl.name} adds registers (latency $lat)")
@@ -172,15 +172,15 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
       }
     }
 
-  triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=auto)", 20000, new TriPipe(p), _.latency, d => (d.io.in, d.io.out),
+  triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=auto)", 20000, new TriPipe(p.pipes), _.latency, d => (d.io.in, d.io.out),
     (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
   private val watertight = new rtaccel.model.RayTriangleWatertight
   for (pl <- Seq(deep) ++ (if (regress) Seq(auto, fixed) else Nil)) {
     val pp = p.copy(pipelining = pl)
-    triPipeTest[WatertightPipe](s"watertight pipe (WatertightPipe, PIPELINE=${pl.name})", 20000, new WatertightPipe(pp), _.latency,
+    triPipeTest[WatertightPipe](s"watertight pipe (WatertightPipe, PIPELINE=${pl.name})", 20000, new WatertightPipe(pp.pipes), _.latency,
       d => (d.io.in, d.io.out), (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true)
   }
-  if (regress) triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=none)", 20000, new TriPipe(p.copy(pipelining = fixed)),
+  if (regress) triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=none)", 20000, new TriPipe(p.copy(pipelining = fixed).pipes),
     d => { assert(d.latency == 8 + p.divStages, "PIPELINE=none keeps 8 + divStages"); d.latency }, d => (d.io.in, d.io.out),
     (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
   // TRI_FORMAT: the pipe in a wider format against the SoftFloat twin (fp64 in make test; e8m31, the same exponent
@@ -188,7 +188,7 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   // divider make a large model whose -O1 build takes minutes, longer than its 20000 cycles run unoptimised)
   for ((tf, pl) <- Seq((FpFormat.fp64, fixed)) ++ (if (regress) Seq((FpFormat(8, 31), auto), (FpFormat.fp64, auto)) else Nil)) {
     val pw = p.copy(triFormat = tf, pipelining = pl); val twin = new rtaccel.model.RayTriangleWide(tf)
-    triPipeTest[TriPipe](s"Möller–Trumbore pipe at TRI_FORMAT=${tf.name}, PIPELINE=${pl.name}", 20000, new TriPipe(pw), _.latency,
+    triPipeTest[TriPipe](s"Möller–Trumbore pipe at TRI_FORMAT=${tf.name}, PIPELINE=${pl.name}", 20000, new TriPipe(pw.pipes), _.latency,
       d => (d.io.in, d.io.out), (r, tmax, v, o) => twin.testSoft(r, tmax, v(0), v(1), v(2), v(3), v(4), v(5), v(6), v(7), v(8), o),
       ties = false, wide = true, annos = rtaccel.sim.VerilatorBuild("o0", Nil, Seq("-O0"), Some("-O0"), jobs = 1).annotations)
   }
