@@ -24,9 +24,10 @@ class PlatformSpec extends AnyFunSuite {
   private val grid: Seq[(Int, Int, Seq[Int], Pipelining, String)] =
     if (full) (for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16), Pipelining.Auto, "xc5v")) ++
       Seq((4, 2, Seq(2), Pipelining.Fixed, "xc5v"), (2, 4, Seq(4), Pipelining.Levels(3), "xc5v"), (2, 4, Seq(4), Pipelining.Auto, "ecp5"))
-    // make test: one TU with the longest leaves on ecp5's circuit, four TUs with one primitive per leaf at the fixed
-    // stages; every other case of make test runs the Virtex-5 circuit at auto
-    else Seq((1, 4, Seq(16), Pipelining.Auto, "ecp5"), (4, 2, Seq(1), Pipelining.Fixed, "xc5v"))
+    // make test: two TUs with the longest leaves on ecp5's circuit at M=2 (its 18x18 tiles make the largest model of
+    // make test; M=4 there is make regress's), four TUs with one primitive per leaf at the fixed stages; every other
+    // case of make test runs the Virtex-5 circuit at auto and M=4
+    else Seq((2, 2, Seq(16), Pipelining.Auto, "ecp5"), (4, 2, Seq(1), Pipelining.Fixed, "xc5v"))
 
   private val scene = TestScenes.soup(31, 400)
   private val rays = {
