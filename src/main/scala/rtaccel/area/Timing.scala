@@ -5,7 +5,8 @@ import rtaccel.io.InputError
 
 /** The levels -> MHz rule of one family (boards/timing.json): a proxy with no placement, routing or retiming. */
 final case class FamilyTiming(family: String, levelNs: Double, overheadNs: Double, capMhz: Double, source: String,
-                              dsp: rtaccel.fp.DspShape = rtaccel.fp.DspShape.Dsp48, delayRamCycles: Option[Int] = None) {
+                              dsp: rtaccel.fp.DspShape = rtaccel.fp.DspShape.Dsp48, delayRamCycles: Option[Int] = None,
+                              lutInputs: Int = 6) {
   def dspLevels: Int = dsp.levels
   def fmaxMhz(levels: Int): Double = math.min(capMhz, 1000.0 / (overheadNs + levels * levelNs))
   /** The most LUT levels a path may have at `mhz` by this rule (at least 1): what PIPELINE=auto budgets. */
@@ -40,6 +41,11 @@ object Timing {
       v.numOpt.filter(d => d >= 2 && d == d.toInt).map(_.toInt)
         .getOrElse(throw new InputError(s"family '$family' in $path: delay_ram_cycles must be a whole number >= 2 or null (got $v)"))
     }
-    FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""), dsp.copy(registered = registered), delayRam)
+    // lut_inputs: absent for the 6-input LUTs of the Xilinx families
+    val lutInputs = t.obj.get("lut_inputs").filterNot(_.isNull).map { v =>
+      v.numOpt.filter(d => (d == 4 || d == 6)).map(_.toInt)
+        .getOrElse(throw new InputError(s"family '$family' in $path: lut_inputs must be 4 or 6 (got $v)"))
+    }.getOrElse(6)
+    FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""), dsp.copy(registered = registered), delayRam, lutInputs)
   }
 }

@@ -153,7 +153,7 @@ object Fp {
     val rSat = UInt(rW.W)
     val leftCase = Bool()
     /** Bit i set when the right shift moves bit i of the rounding's window out (i < rSat): the sticky bit is then an
-      * AND-OR of the window and this mask, not an OR over the shifter's outputs. */
+      * AND-OR of the window and this mask, not an OR over the shifter's outputs (4-input LUTs only, see roundPackT). */
     val rMask = Option.when(maskW > 0)(UInt(maskW.W))
   }
 
@@ -209,10 +209,16 @@ object Fp {
       o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
       o
     }
+    // Where LUTs have 4 inputs, an OR of the right shifter's 28 outputs below the window is a level deeper than Depth
+    // counts (it was WatertightPipe's routed critical path on ECP5): the sticky bit is then an AND-OR of the window and
+    // a mask decoded a segment earlier. On 6-input LUTs the mask's register and decode cost more than they save
+    // (fp32 mul on xc7 at 6 levels: 406 LUTs against 360), so the OR stays there when pipelined; unpipelined (no
+    // register between them) the mask is what ABC maps smaller (mul 396 against 441 LUTs).
+    val stickyByMask = canUnderflow && (pipe.lutInputs < 6 || pipe.budget.isEmpty)
     // 1b: the left shift, the leading zeros saturated at the room (its own segment: after a wide count, the compare
     // and its mux were the deepest step of a wide significand, WatertightPipe's routed critical path on ECP5)
     val mid = pipe.step(lzd, Depth.carry(lzd.v.slW) + 1) { r =>
-      val o = Wire(new NormMid(n, w, r.slW, r.rW, if (canUnderflow) j else 0))
+      val o = Wire(new NormMid(n, w, r.slW, r.rW, if (stickyByMask) j else 0))
       o.sign := r.sign; o.exp := r.exp; o.sig := r.sig; o.sl := Mux(r.sl < r.room, r.sl, r.room); o.rSat := r.rSat
       o.leftCase := r.leftCase; o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
       for (mk <- o.rMask) mk := VecInit((0 until j).map(i => r.rSat > i.U)).asUInt
@@ -227,10 +233,15 @@ object Fp {
       if (canUnderflow) {
         // right: shifted by j + 1 or more, everything lands below the window: the saturation above
         val win = if (n > j) Cat(r.sig(n - 1, n - j + 1), r.sig(n - j, 0).orR) else r.sig
-        o.sig := Mux(r.leftCase, leftSig, win >> r.rSat)
-        // the bits it moves out, by the mask (bit i of win leaves when i < rSat): after the shifter, an OR of its
-        // outputs was WatertightPipe's routed critical path on ECP5
-        o.sticky := r.sticky || (!r.leftCase && (win & r.rMask.get).orR)
+        r.rMask match {
+          case Some(mk) => // the bits it moves out, by the mask: bit i of win leaves when i < rSat
+            o.sig := Mux(r.leftCase, leftSig, win >> r.rSat)
+            o.sticky := r.sticky || (!r.leftCase && (win & mk).orR)
+          case None => // the bits it moves out, from the shifter's outputs below the window
+            val wideR = Cat(win, 0.U((j + 1).W)) >> r.rSat
+            o.sig := Mux(r.leftCase, leftSig, wideR(2 * j, j + 1))
+            o.sticky := r.sticky || (!r.leftCase && wideR(j, 0).orR)
+        }
       } else { o.sig := leftSig; o.sticky := r.sticky }
       o.exp := Mux(r.leftCase, r.exp - r.sl.zext, 1.S) // >= 1; with sig's MSB clear only when it is 1 (subnormal)
       o.sign := r.sign; o.toPos := r.toPos; o.sp := r.sp

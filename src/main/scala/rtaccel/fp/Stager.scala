@@ -35,8 +35,10 @@ object DspShape {
   * products of the target's DSP blocks (`dsp`), summed on carry chains with registers between the sums.
   * `delayRam` (families without shift-register LUTs, boards/timing.json `delay_ram_cycles`): a value delayed by at
   * least that many cycles goes through a ring in LUT RAM instead of a chain of flip-flops (`chain`).
+  * `lutInputs` (boards/timing.json `lut_inputs`, 6 where absent): where a wide OR after a shifter takes a LUT level
+  * more than Depth counts (4-input LUTs), roundPack takes its sticky bit another way (Fp.roundPackT).
   */
-final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, val delayRam: Option[Int] = None) {
+final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, val delayRam: Option[Int] = None, val lutInputs: Int = 6) {
   require(delayRam.forall(_ >= 2), s"a delay in LUT RAM takes at least 2 cycles (got ${delayRam.get})")
   require(budget.forall(_ >= 1), s"a pipeline budget must be at least 1 LUT level (got ${budget.get})")
   private var placed = Stager.Census()

@@ -100,9 +100,9 @@ object PlatformRun {
     */
   def paramsDigest(p: PlatformParams): String =
     // the clock and family shape the circuit only through PIPELINE's budget and (with one) the family's DSP block
-    // and delay chains, which are hashed in their place
+    // and delay chains and its LUTs' inputs, which are hashed in their place
     java.security.MessageDigest.getInstance("SHA-256").digest((p.copy(name = "", clockMhz = 1, clockSource = "", family = "",
-      pipelineMhz = None).toString + s" budget ${p.stageBudget}" + p.stageBudget.fold("")(_ => s" dsp ${p.dspShape} ram ${p.delayRamCycles}")).getBytes("UTF-8"))
+      pipelineMhz = None).toString + s" budget ${p.stageBudget}" + p.stageBudget.fold("")(_ => s" dsp ${p.dspShape} ram ${p.delayRamCycles} lut ${p.pipes.lutInputs}")).getBytes("UTF-8"))
       .take(5).map(b => f"${b & 0xff}%02x").mkString
 
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised).

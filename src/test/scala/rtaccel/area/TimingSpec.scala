@@ -33,6 +33,10 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     val v5 = Boards.byName("xc5vlx330t")
     assert(v5.ecp5.isEmpty && v5.capacities == Seq("lut" -> 207360L, "ff" -> 207360L, "dsp" -> 192L, "bram36" -> 324L))
     assert(Boards.ecp5Names() == Seq("ecp5-45", "ecp5-85"))
+    // ECP5's LUT4 (roundPack's sticky bit by mask there); the Xilinx families' LUT6
+    assert(Timing.forFamily("ecp5").lutInputs == 4 && Seq("xc5v", "xc7", "xcu").forall(Timing.forFamily(_).lutInputs == 6))
+    assert(rtaccel.config.Presets.paper2017.copy(family = "ecp5").pipes.lutInputs == 4)
+    assert(rtaccel.config.Presets.paper2017.copy(family = "ecp5", pipelining = rtaccel.config.Pipelining.Fixed).pipes.lutInputs == 6)
     val e = intercept[InputError](Boards.requireXilinx(b, "make area"))
     assert(e.getMessage.contains("make timing BOARD=ecp5-85"), e.getMessage)
   }

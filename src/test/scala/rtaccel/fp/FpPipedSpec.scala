@@ -9,13 +9,13 @@ import org.scalatest.funsuite.AnyFunSuite
 /** Every FpOps operation built by a Stager with a budget (registers inside the operators, fp.Stager), one pair per
   * cycle, all results read at the cycle of the slowest: `out` packs the 8 value results then the 5 compare bits.
   */
-class FpPipedHarness(f: FpFormat, budget: Int, dsp: DspShape = DspShape.Dsp48) extends Module {
+class FpPipedHarness(f: FpFormat, budget: Int, dsp: DspShape = DspShape.Dsp48, lutInputs: Int = 6) extends Module {
   val io = IO(new Bundle {
     val a = Input(UInt(f.width.W))
     val b = Input(UInt(f.width.W))
     val out = Output(UInt((FpOps.numValueOps * f.width + 5).W))
   })
-  private val pipe = new Stager(Some(budget), dsp)
+  private val pipe = new Stager(Some(budget), dsp, None, lutInputs)
   private val a = Timed(io.a, 0, 1); private val b = Timed(io.b, 0, 1)
   private val div = Module(new FpDivPipe(f, 0, Some(budget)))
   div.io.in.valid := true.B; div.io.in.bits.a := io.a; div.io.in.bits.b := io.b
@@ -39,8 +39,9 @@ class FpPipedSpec extends AnyFunSuite with ChiselScalatestTester {
   // a made-up 7 x 9 DSP block cuts the product into 12 tiles summed over four levels (the tree ECP5's 18 x 18 blocks
   // use with four tiles); ECP5's blocks with their own registers (DspTile, two cycles a tile); make regress adds 4 and
   // 9 levels and ECP5's block inferred
-  private val runs = Seq((2, DspShape.Dsp48), (6, DspShape.Dsp48), (3, DspShape(7, 9)), (5, DspShape(18, 18, 3, registered = true))) ++
-    (if (rtaccel.Regress.full) Seq((4, DspShape.Dsp48), (9, DspShape.Dsp48), (2, DspShape(18, 18))) else Nil)
+  // (ECP5's 4-input LUTs: roundPack's sticky bit by mask, Fp.roundPackT)
+  private val runs = Seq((2, DspShape.Dsp48, 6), (6, DspShape.Dsp48, 6), (3, DspShape(7, 9), 6), (5, DspShape(18, 18, 3, registered = true), 4)) ++
+    (if (rtaccel.Regress.full) Seq((4, DspShape.Dsp48, 6), (9, DspShape.Dsp48, 6), (2, DspShape(18, 18), 4), (4, DspShape.Dsp48, 4)) else Nil)
   test("a product's tiles cover each bit pair of the operands once, within the DSP block") {
     for (n <- Seq(8, 11, 17, 18, 24, 25, 53); dsp <- Seq(DspShape.Dsp48, DspShape(18, 18), DspShape(7, 9))) {
       val tiles = Fp.mulTiles(n, dsp)
@@ -50,9 +51,9 @@ class FpPipedSpec extends AnyFunSuite with ChiselScalatestTester {
     }
     assert(Fp.mulTiles(24, DspShape(18, 18)).length == 4 && Fp.mulTiles(24, DspShape.Dsp48).length == 2)
   }
-  for ((budget, dsp) <- runs)
-    test(s"fp32 operators pipelined at a $budget-level budget on ${dsp} DSP blocks equal Java float on edge pairs, ties and $nRandom random pairs, one per cycle") {
-      test(new FpPipedHarness(fp32, budget, dsp)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+  for ((budget, dsp, lutIn) <- runs)
+    test(s"fp32 operators pipelined at a $budget-level budget on ${dsp} DSP blocks and $lutIn-input LUTs equal Java float on edge pairs, ties and $nRandom random pairs, one per cycle") {
+      test(new FpPipedHarness(fp32, budget, dsp, lutIn)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
         val lat = dut.latency
         info(s"latencies (add, sub, mul, div, min/max x4, compares x5): ${dut.opLatencies.mkString(", ")}; read at $lat")
         val g = new FpTestGen(fp32, 11 + budget + dsp.a)
