@@ -6,7 +6,7 @@ import rtaccel.io.InputError
 /** The levels -> MHz rule of one family (boards/timing.json): a proxy with no placement, routing or retiming. */
 final case class FamilyTiming(family: String, levelNs: Double, overheadNs: Double, capMhz: Double, source: String,
                               dsp: rtaccel.fp.DspShape = rtaccel.fp.DspShape.Dsp48, delayRamCycles: Option[Int] = None,
-                              lutInputs: Int = 6) {
+                              lutInputs: Int = rtaccel.fp.Depth.LutInputs) {
   def dspLevels: Int = dsp.levels
   def fmaxMhz(levels: Int): Double = math.min(capMhz, 1000.0 / (overheadNs + levels * levelNs))
   /** The most LUT levels a path may have at `mhz` by this rule (at least 1): what PIPELINE=auto budgets. */
@@ -45,7 +45,7 @@ object Timing {
     val lutInputs = t.obj.get("lut_inputs").filterNot(_.isNull).map { v =>
       v.numOpt.filter(d => (d == 4 || d == 6)).map(_.toInt)
         .getOrElse(throw new InputError(s"family '$family' in $path: lut_inputs must be 4 or 6 (got $v)"))
-    }.getOrElse(6)
+    }.getOrElse(rtaccel.fp.Depth.LutInputs)
     FamilyTiming(family, num("level_ns"), num("overhead_ns"), num("cap_mhz"), t.obj.get("source").map(_.str).getOrElse(""), dsp.copy(registered = registered), delayRam, lutInputs)
   }
 }

@@ -330,7 +330,7 @@ final case class PlatformParams(
   /** The view the IU's arithmetic pipes take: only what shapes them. */
   lazy val pipes: rtaccel.iu.PipeParams = rtaccel.iu.PipeParams(m, tuBits, boxFormat, boxSlackUlps, triTest, triFormat, divStages,
     stageBudget, stageBudget.map(_ => dspShape), stageBudget.flatMap(_ => delayRamCycles),
-    stageBudget.fold(6)(_ => rtaccel.area.Timing.forFamily(family).lutInputs))
+    stageBudget.fold(rtaccel.fp.Depth.LutInputs)(_ => rtaccel.area.Timing.forFamily(family).lutInputs))
   /** With a budget, on a family without shift-register LUTs (boards/timing.json `delay_ram_cycles`): delays of at
     * least this many cycles in LUT RAM (fp.Stager.chain). */
   lazy val delayRamCycles: Option[Int] = rtaccel.area.Timing.forFamily(family).delayRamCycles

@@ -214,7 +214,7 @@ object Fp {
     // a mask decoded a segment earlier. On 6-input LUTs the mask's register and decode cost more than they save
     // (fp32 mul on xc7 at 6 levels: 406 LUTs against 360), so the OR stays there when pipelined; unpipelined (no
     // register between them) the mask is what ABC maps smaller (mul 396 against 441 LUTs).
-    val stickyByMask = canUnderflow && (pipe.lutInputs < 6 || pipe.budget.isEmpty)
+    val stickyByMask = canUnderflow && (pipe.lutInputs < Depth.LutInputs || pipe.budget.isEmpty)
     // 1b: the left shift, the leading zeros saturated at the room (its own segment: after a wide count, the compare
     // and its mux were the deepest step of a wide significand, WatertightPipe's routed critical path on ECP5)
     val mid = pipe.step(lzd, Depth.carry(lzd.v.slW) + 1) { r =>

@@ -38,7 +38,7 @@ object DspShape {
   * `lutInputs` (boards/timing.json `lut_inputs`, 6 where absent): where a wide OR after a shifter takes a LUT level
   * more than Depth counts (4-input LUTs), roundPack takes its sticky bit another way (Fp.roundPackT).
   */
-final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, val delayRam: Option[Int] = None, val lutInputs: Int = 6) {
+final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, val delayRam: Option[Int] = None, val lutInputs: Int = Depth.LutInputs) {
   require(delayRam.forall(_ >= 2), s"a delay in LUT RAM takes at least 2 cycles (got ${delayRam.get})")
   require(budget.forall(_ >= 1), s"a pipeline budget must be at least 1 LUT level (got ${budget.get})")
   private var placed = Stager.Census()
@@ -158,6 +158,8 @@ object Stager {
   * follow these, and make area's measured levels show how close they are (docs/timing.md).
   */
 object Depth {
+  /** The LUT size every count below assumes (Xilinx LUT6); a family with smaller LUTs says so in boards/timing.json. */
+  val LutInputs = 6
   private def log(b: Double, n: Int): Int = math.ceil(math.log(n.toDouble max 2) / math.log(b) - 1e-9).toInt
   /** An OR (or AND) of n bits. */
   def reduce(n: Int): Int = log(6, n) max 1
