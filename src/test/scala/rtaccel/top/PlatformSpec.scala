@@ -90,9 +90,14 @@ class PlatformSpec extends AnyFunSuite {
     o
   }
 
+  // make test: the fixed-stage grid circuit has a 3-entry stack, so that the rays that overflow it (prim -3) are
+  // flagged exactly as the model's in the same build as the MAX_STEPS case below (make regress: "a stack too small")
+  private val smallStack = 3
+  private def gridStack(pl: Pipelining) = if (!full && pl == Pipelining.Fixed) smallStack else 64
   for ((tus, m, mppls, pl, fam) <- grid; mppl <- mppls)
-    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl PIPELINE=${pl.name}${if (fam != "xc5v") s" for $fam" else ""}") {
-      val j = runOne(tus, m, mppl, rays, scene, pipeline = pl, family = fam).json
+    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl PIPELINE=${pl.name}${if (fam != "xc5v") s" for $fam" else ""}${if (gridStack(pl) < 64) s"; a ${gridStack(pl)}-entry stack overflows exactly the model's rays" else ""}") {
+      val j = runOne(tus, m, mppl, rays, scene, pipeline = pl, family = fam, stack = gridStack(pl)).json
+      if (gridStack(pl) < 64) someOverflowed(j, gridStack(pl))
       assert(j("pipeline")("mode").str == pl.name && j("pipeline")("budget_levels").isNull == (pl == Pipelining.Fixed), ujson.write(j("pipeline")))
       assert(j("pipeline")("family").str == fam, ujson.write(j("pipeline")))
     }
@@ -116,7 +121,7 @@ class PlatformSpec extends AnyFunSuite {
     info(s"${j("overflowed").num.toInt} of ${rays.count} rays overflowed a $stack-entry stack")
     assert(j("model_overflowed").num > 0 && j("model_overflowed").num < rays.count, "the test stack must overflow some rays, not all")
   }
-  // make test: in the read errors' circuit below (both kinds of flagged ray in one run)
+  // make test: in the grid's fixed-stage circuit above
   if (full) test("a stack too small for the scene: the RTL flags exactly the model's overflowed rays, bit for bit") {
     someOverflowed(runOne(2, 8, 1, rays, scene, stack = 2).json, 2)
   }
@@ -125,28 +130,29 @@ class PlatformSpec extends AnyFunSuite {
   // errors"). Sticky: exactly the rays that read one are flagged prim -2 (a re-read fails again, and a cached beat
   // keeps its error), every other ray stays bit-exact. Transient (the same circuit: the mode is the DRAM model's
   // input): the MC's re-read is clean, so no ray is flagged and every ray equals the fault-free model.
-  // make test: with a 3-entry stack, so that the overflowed rays (prim -3) are flagged in the same run.
-  private val smallStack = 3
-  for ((what, tus, node, prim, stack) <- Seq(("DM node + 2-way LRU primitive caches", 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 2, CachePolicy.Lru), if (full) 64 else smallStack)) ++
-      (if (full) Seq(("no cache", 4, CacheParams(), CacheParams(), 64)) else Nil))
-    test(s"memory read errors: sticky ones flag exactly the affected rays, transient ones are re-read and flag none, the rest bit-exact: $what${if (stack < 64) s"; a $stack-entry stack overflows exactly the model's rays" else ""}") {
-      // a seed whose poison spares the root node (a poisoned root fails every ray, which tests less)
-      val rate = 0.003
-      val seed = rootSpared(rate)
-      val j = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = rate, seed = seed, stack = stack).json
-      if (stack < 64) someOverflowed(j, stack)
-      info(f"sticky: ${j("read_errors").num}%.0f of ${rays.count} rays read a poisoned beat (${j("mem_error_beats").num}%.0f error beats, ${j("mem_retries").num}%.0f re-reads)")
-      assert(j("model_read_errors").num > 0 && j("model_read_errors").num < rays.count, "the rate must hit some rays, not all")
-      assert(j("mem_error_beats").num > 0 && j("mem_error_beats").num == j("counters")("mem_read_errors").num)
-      // every failed read is read once more and fails again: as many error beats again as re-reads bring
-      assert(j("mem_retries").num > 0 && j("mem_error_beats").num >= 2 * j("mem_retries").num, ujson.write(j))
-      // no errored fill stays a good line: later lookups refetch it (and fail again), replayed by the trace model
-      if (node.entries > 0) assert(j("poison_refetches").num > 0, "no lookup met a poisoned line")
-      val t = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = rate, seed = seed, stack = stack,
-        errorMode = MemFaults.Transient).json
-      info(f"transient: ${t("read_errors").num}%.0f rays flagged, ${t("mem_error_beats").num}%.0f error beats, ${t("mem_retries").num}%.0f re-reads, ${t("health")("usable").num}%.0f usable")
-      assert(t("read_errors").num == 0 && t("model_read_errors").num == 0 && t("mem_error_mode").str == "transient", ujson.write(t))
-      assert(t("mem_retries").num > 0 && t("mem_error_beats").num > 0, "the transient run met no error")
+  // make test: in the all-formats circuit below (the error mode and rate are the DRAM model's inputs, not the circuit's)
+  private val errorRate = 0.003
+  /** A seed whose poison at errorRate spares the root node (a poisoned root fails every ray, which tests less). */
+  private lazy val errorSeed = rootSpared(errorRate)
+  /** A sticky and a transient run of one circuit at errorRate and errorSeed (the mode is the DRAM model's input). */
+  private def checkReadErrors(j: ujson.Value, t: ujson.Value, cached: Boolean): Unit = {
+    info(f"sticky: ${j("read_errors").num}%.0f of ${rays.count} rays read a poisoned beat (${j("mem_error_beats").num}%.0f error beats, ${j("mem_retries").num}%.0f re-reads)")
+    assert(j("model_read_errors").num > 0 && j("model_read_errors").num < rays.count, "the rate must hit some rays, not all")
+    assert(j("mem_error_beats").num > 0 && j("mem_error_beats").num == j("counters")("mem_read_errors").num)
+    // every failed read is read once more and fails again: as many error beats again as re-reads bring
+    assert(j("mem_retries").num > 0 && j("mem_error_beats").num >= 2 * j("mem_retries").num, ujson.write(j))
+    // no errored fill stays a good line: later lookups refetch it (and fail again), replayed by the trace model
+    if (cached) assert(j("poison_refetches").num > 0, "no lookup met a poisoned line")
+    info(f"transient: ${t("read_errors").num}%.0f rays flagged, ${t("mem_error_beats").num}%.0f error beats, ${t("mem_retries").num}%.0f re-reads, ${t("health")("usable").num}%.0f usable")
+    assert(t("read_errors").num == 0 && t("model_read_errors").num == 0 && t("mem_error_mode").str == "transient", ujson.write(t))
+    assert(t("mem_retries").num > 0 && t("mem_error_beats").num > 0, "the transient run met no error")
+  }
+  if (full) for ((what, tus, node, prim) <- Seq(("DM node + 2-way LRU primitive caches", 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(64, 2, CachePolicy.Lru)),
+      ("no cache", 4, CacheParams(), CacheParams())))
+    test(s"memory read errors: sticky ones flag exactly the affected rays, transient ones are re-read and flag none, the rest bit-exact: $what") {
+      def run(mode: String) = runOne(tus, 4, 4, rays, scene, jitter = 13, node = node, prim = prim, errorRate = errorRate, seed = errorSeed,
+        errorMode = mode).json
+      checkReadErrors(run(MemFaults.Sticky), run(MemFaults.Transient), node.entries > 0)
     }
   // MEM_RETRIES=0 keeps the flag at once: sticky errors flag the model's rays, transient ones the rays that read a
   // poisoned beat first (timing decides which; each of them one the model says reads one)
@@ -273,20 +279,31 @@ class PlatformSpec extends AnyFunSuite {
 
   // Every format at once in one circuit (make test's case of each): bf16 boxes, the watertight test and its slack,
   // q8 nodes through NodeDecode, packed leaves through LeafAssembler, both caches, DRAM jitter and host backpressure.
+  // make test: its DRAM poisons beats, transient (every error is re-read clean, so each ray equals the fault-free
+  // model and the comparisons below hold) then sticky on the same build (exactly the model's rays flagged, the leaf
+  // bytes of the faulty model); make regress: fault-free here and the errors on their own above
   private val formatTus = if (full) 8 else 4
-  test(s"all formats in one circuit (bf16, watertight, q8, packed) at $formatTus TUs with both caches: bit-exact, counts equal the model") {
-    val r = runOne(formatTus, 4, 4, rays, scene, jitter = 29, stall = 30, node = CacheParams(64, 2, CachePolicy.Lru),
-      prim = CacheParams(32, 2, CachePolicy.Lru), box = rtaccel.fp.FpFormat.parse("bf16"), tri = TriTest.Watertight,
-      packed = true, nodeQuant = 8)
+  test(s"all formats in one circuit (bf16, watertight, q8, packed) at $formatTus TUs with both caches: bit-exact, counts equal the model${if (full) "" else "; memory read errors, transient and sticky"}") {
+    val (rate, seed) = if (full) (0.0, 1) else (errorRate, errorSeed)
+    val params = Presets.paper2017.copy(tus = formatTus, boxFormat = rtaccel.fp.FpFormat.parse("bf16"), triTest = TriTest.Watertight,
+      primPacked = true, nodeQuantBits = 8)
+    def formats(mode: String) = runOne(formatTus, 4, 4, rays, scene, jitter = 29, stall = 30,
+      node = CacheParams(64, 2, CachePolicy.Lru), prim = CacheParams(32, 2, CachePolicy.Lru), box = params.boxFormat,
+      tri = params.triTest, packed = true, nodeQuant = 8, errorRate = rate, seed = seed, errorMode = mode)
+    val r = formats(MemFaults.Transient)
     val n = r.json("numerics")
     assert(n("box_format").str == "bf16" && n("tri_test").str == "watertight" && n("node_format").str == "q8" &&
       n("prim_format").str == "packed", ujson.write(n))
-    checkLeafBytes(r.json, Presets.paper2017.copy(tus = formatTus, boxFormat = rtaccel.fp.FpFormat.parse("bf16"), triTest = TriTest.Watertight,
-      primPacked = true, nodeQuantBits = 8))
     val (fp, fullNodes) = modelRun(Presets.paper2017.copy(tus = formatTus))
     info(f"node fetches: all formats ${r.json("node_requests").num}%.0f, fp32 full $fullNodes")
     val agree = (0 until rays.count).count(i => r.hits.prim(i) == fp.prim(i))
     assert(agree > rays.count * 9 / 10, s"only $agree of ${rays.count} rays hit fp32 Möller–Trumbore's primitive")
+    if (full) checkLeafBytes(r.json, params)
+    else {
+      val sticky = formats(MemFaults.Sticky).json
+      checkReadErrors(sticky, r.json, cached = true)
+      checkLeafBytes(sticky, params, rate, seed)
+    }
   }
 
   /** The reference model alone on this spec's scene and rays: its hits and node fetches. */
@@ -398,7 +415,7 @@ class PlatformSpec extends AnyFunSuite {
   // The step limit through the whole platform (register, TUs, hit word, status, counter, health) on the grid's 4-TU
   // circuit: MAX_STEPS is the register's reset value only and the host writes it, so the build is the grid's own
   test("MAX_STEPS written by the host: the rays that need more fetches end flagged prim -4, exactly the model's; STATUS, counter and health agree") {
-    val o = runOne(4, 2, 1, rays, scene, pipeline = Pipelining.Fixed, steps = Some(6))
+    val o = runOne(4, 2, 1, rays, scene, pipeline = Pipelining.Fixed, steps = Some(6), stack = gridStack(Pipelining.Fixed))
     val j = o.json
     val limited = (0 until rays.count).filter(o.hits.prim(_) == rtaccel.scene.Hits.StepLimit)
     info(s"${limited.length} of ${rays.count} rays needed more than 6 fetches")
@@ -406,7 +423,9 @@ class PlatformSpec extends AnyFunSuite {
     assert(j("max_steps").num == 6 && j("step_limit_rays").num == limited.length && j("health")("step_limit").num == limited.length)
     assert(j("counters")("step_limit_rays").num == limited.length && j("status")("step_limit").bool)
     assert(limited.forall(i => o.hits.t(i) == Float.PositiveInfinity && o.hits.u(i) == 0f && o.hits.v(i) == 0f))
-    assert(j("health")("usable").num + limited.length == rays.count)
+    // (make test's grid circuit has a small stack: its overflowed rays are not usable either)
+    val overflowedOnly = (0 until rays.count).count(i => o.hits.prim(i) == rtaccel.scene.Hits.Overflow)
+    assert(j("health")("usable").num + limited.length + overflowedOnly == rays.count)
   }
 
   // a memory image with silent bit flips (seeded) on the whole platform, at the default step limit of a fitted circuit
