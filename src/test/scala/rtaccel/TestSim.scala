@@ -8,4 +8,9 @@ import firrtl2.annotations.Annotation
   */
 object TestSim {
   val quick: Seq[Annotation] = VerilatorBackendAnnotation +: rtaccel.sim.VerilatorBuild.quick.annotations
+  /** `quick` with one build per folder (build/sim-test/<folder>) that every test of the same circuit reuses:
+    * chiseltest's cache compares the lowered circuit, so another circuit in the folder is rebuilt, never reused.
+    */
+  def cached(folder: String): Seq[Annotation] =
+    quick ++ Seq(chiseltest.internal.CachingAnnotation, firrtl2.options.TargetDirAnnotation(s"build/sim-test/$folder"))
 }

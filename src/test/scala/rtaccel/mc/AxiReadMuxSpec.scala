@@ -15,7 +15,8 @@ class AxiReadMuxSpec extends AnyFlatSpec with ChiselScalatestTester {
 
   private def run(n: Int, depth: Int, cycles: Int, seed: Int, arReady: Double, rValid: Double, rReady: Double, c: Int = 1): Int = {
     var beatsChecked = 0
-    test(new AxiReadMux(axi, n, depth, c, 12)) { dut =>
+    // Verilator, one build per circuit shared by its seeds (treadle took 57 s for the multi-channel case alone)
+    test(new AxiReadMux(axi, n, depth, c, 12)).withAnnotations(rtaccel.TestSim.cached(s"AxiReadMuxSpec/n$n-d$depth-c$c")) { dut =>
       val rnd = new Random(seed)
       // master i's burst k: page 4k + 0..3 of master i's 16 MB (unique, its channel random), len 0..7; a slave
       // answers beat b of address a with a * 16 + b

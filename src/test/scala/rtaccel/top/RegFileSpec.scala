@@ -121,8 +121,10 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
     def dump(): Seq[(String, Long)] = regs.map(r => r.name -> readOk(r))
   }
 
+  // One Verilator build serves every test (the same circuit, cached in one folder): treadle took 38 s for the suite
+  private val sim = rtaccel.TestSim.cached("RegFileSpec")
   private def withHost(seed: Long)(body: (RegFile, Host) => Unit): Unit =
-    test(regFile) { dut =>
+    test(regFile).withAnnotations(sim) { dut =>
       val h = new Host(dut, seed)
       h.idle()
       body(dut, h)
