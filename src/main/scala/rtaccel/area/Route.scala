@@ -69,30 +69,11 @@ object Route {
     res("proxy_lut_levels") = lv; res("proxy_levels_version") = Levels.version; res("proxy_fmax_mhz") = t.fmaxMhz(lv)
   }
 
-  /** The files of `top` and of every module under it: firtool writes one file per module, named after it, and a
-    * module's file names each module it instantiates. synth_ecp5 keeps only the top's hierarchy, so reading the
-    * other modules (a whole platform's, when the top is one unit of it) only costs time: a 141-LUT unit of 'small'
-    * took 10 s in Yosys reading every module. The cache key still hashes every emitted file.
-    */
-  def hierarchy(files: Seq[Path], top: String): Seq[Path] = {
-    val byName = files.map(f => f.getFileName.toString.stripSuffix(".sv") -> f).toMap
-    val word = "[A-Za-z_][A-Za-z0-9_$]*".r
-    def below(m: String): Set[String] =
-      word.findAllIn(Files.readString(byName(m))).filter(w => w != m && byName.contains(w)).toSet
-    @annotation.tailrec def close(todo: List[String], seen: Set[String]): Set[String] = todo match {
-      case Nil => seen
-      case m :: rest => val n = below(m) -- seen; close(n.toList ++ rest, seen ++ n)
-    }
-    val keep = close(List(top), Set(top))
-    // files that are not modules (firtool's include files, if any) stay
-    files.filter(f => keep(f.getFileName.toString.stripSuffix(".sv")) || !f.toString.endsWith(".sv"))
-  }
-
   /** Copies the circuit (the top's hierarchy) into `work` and synthesizes it there (netlist.json, stat.json, yosys.log). */
   private def synthesize(j: Job, work: Path, wrap: String, what: String, say: String => Unit): Unit = {
     deleteTree(work) // an interrupted run's
     Files.createDirectories(work.resolve("rtl"))
-    val rtl = hierarchy(j.files, j.top).map { f => Files.copy(f, work.resolve("rtl").resolve(f.getFileName), StandardCopyOption.REPLACE_EXISTING); s"rtl/${f.getFileName}" }
+    val rtl = Synthesis.hierarchy(j.files, j.top).map { f => Files.copy(f, work.resolve("rtl").resolve(f.getFileName), StandardCopyOption.REPLACE_EXISTING); s"rtl/${f.getFileName}" }
     Files.writeString(work.resolve("wrap.v"), wrap)
     Files.writeString(work.resolve("synth.ys"), synthScript(rtl))
     say(s"yosys $yosysVersion synth_ecp5: $what (seconds for a unit, minutes for BoxPipe, TriPipe or the platform)")

@@ -34,6 +34,25 @@ object Synthesis {
     run(files, top, family, cacheRoot, s"$top of '${p.name}'", say, rtaccel.cli.Cli.version, cachedOnly)
   }
 
+  /** The files of `top` and of every module under it: firtool writes one file per module, named after it, and a
+    * module's file names each module it instantiates. Yosys keeps only the top's hierarchy, so reading the
+    * other modules (a whole platform's, when the top is one unit of it) only costs time: a 141-LUT unit of 'small'
+    * took 10 s in YoWASP's Yosys reading every module. Cache keys still hash every emitted file.
+    */
+  def hierarchy(files: Seq[Path], top: String): Seq[Path] = {
+    val byName = files.map(f => f.getFileName.toString.stripSuffix(".sv") -> f).toMap
+    val word = "[A-Za-z_][A-Za-z0-9_$]*".r
+    def below(m: String): Set[String] =
+      word.findAllIn(Files.readString(byName(m))).filter(w => w != m && byName.contains(w)).toSet
+    @annotation.tailrec def close(todo: List[String], seen: Set[String]): Set[String] = todo match {
+      case Nil => seen
+      case m :: rest => val n = below(m) -- seen; close(n.toList ++ rest, seen ++ n)
+    }
+    val keep = close(List(top), Set(top))
+    // files that are not modules (firtool's include files, if any) stay
+    files.filter(f => keep(f.getFileName.toString.stripSuffix(".sv")) || !f.toString.endsWith(".sv"))
+  }
+
   def run(files: Seq[Path], top: String, family: String, cacheRoot: Path, what: String, say: String => Unit,
           rtaccelVersion: String, cachedOnly: Boolean = false): Synthesis = {
     val version = Yosys.version()
@@ -46,7 +65,7 @@ object Synthesis {
       val work = dir.resolve("work")
       Files.createDirectories(work)
       say(s"synthesizing $what for $family with Yosys $version (minutes for the whole platform)")
-      Yosys.synthesize(files, recipe, work, what, say)
+      Yosys.synthesize(hierarchy(files, top), recipe, work, what, say)
       val levels = Levels.ofNetlist(work.resolve(Yosys.netlistFile), Timing.forFamily(family).dspLevels)
       Files.writeString(work.resolve(levelsFile), ujson.write(ujson.Obj("about" -> ("LUT levels of the deepest combinational " +
         "path per module (rtaccel.area.Levels)"), "top" -> top, "family" -> family, "yosys_version" -> version,

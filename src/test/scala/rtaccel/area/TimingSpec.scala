@@ -76,6 +76,18 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(Nextpnr.overflow(log).isEmpty)
   }
 
+  test("the files a unit's synthesis reads: its own and those of every module it names, not the rest of the design") {
+    val d = Files.createDirectories(dir.resolve("hier"))
+    def mod(name: String, body: String) = Files.writeString(d.resolve(s"$name.sv"), s"module $name(input a);\n$body\nendmodule\n")
+    val files = Seq(mod("Top", "  Mid m (.a(a));\n  Leaf l0 (.a(a));"), mod("Mid", "  Leaf l1 (.a(a)); // not Other"),
+      mod("Leaf", "  wire LeafX;"), mod("LeafX", ""), mod("Unused", "  Top t (.a(a));"))
+    def names(top: String) = Synthesis.hierarchy(files, top).map(_.getFileName.toString.stripSuffix(".sv")).toSet
+    assert(names("Top") == Set("Top", "Mid", "Leaf", "LeafX"))
+    // any word that names a module pulls it in (a wire here): a superset costs time only, never a wrong netlist
+    assert(names("Mid") == Set("Mid", "Leaf", "LeafX") && names("Leaf") == Set("Leaf", "LeafX") && names("LeafX") == Set("LeafX"))
+    assert(names("Unused") == Set("Unused", "Top", "Mid", "Leaf", "LeafX"))
+  }
+
   test("a target the unit misses exits 3 with the JSON printed last") {
     assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
     val (code, out, err) = timing("--unit", "BurstSplitter", "--clock-mhz", "2000")
