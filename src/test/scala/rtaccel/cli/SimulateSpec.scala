@@ -12,7 +12,7 @@ class SimulateSpec extends AnyFunSuite {
     val so = new java.io.ByteArrayOutputStream(); val se = new java.io.ByteArrayOutputStream()
     // its own build folder: suites run side by side, and a circuit's folder holds the run's image and rays
     val argv = Array("--tris", tris.toString, "--rays", raysPath.toString, "--out", out.toString, "--config", "small",
-      "--tus", "2", "--work", "build/sim-test/SimulateSpec") ++ extra
+      "--tus", "1", "--work", "build/sim-test/SimulateSpec") ++ extra
     val code = Console.withOut(so)(Console.withErr(se)(Cli.status(argv, Flags.simulate)(Simulate.main0)))
     (code, so.toString, se.toString)
   }
