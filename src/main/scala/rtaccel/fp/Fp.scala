@@ -223,19 +223,21 @@ object Fp {
     val lzSplit = pipe.budget.exists(lzLevels > _) && nLz > lzBlock
     val roomW = log2Ceil(n + 1)
     // 1: leading zeros and, beside them, the room left above exponent 1 and the right shift into the subnormal range
-    def front(r: RoundIn): (UInt, SInt, Bool, UInt, UInt, UInt) = {
+    // (the count is made where it was before the cut existed: Yosys' ABC maps the unpipelined adder in 422 LUTs
+    // instead of 406 on xc7 when the same logic is built in another order)
+    def front[A](r: RoundIn)(count: UInt => A): (UInt, SInt, Bool, A, UInt, UInt) = {
       val sig = if (n > n0) Cat(r.sig, 0.U((n - n0).W)) else r.sig
       val ex = r.exp.pad(w)
       // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
       val leftCase = if (canUnderflow) geConst(ex, 1) else true.B
-      // the count's operand: sig (sig != 0), saturated at maxLs via a sentinel bit
-      val lzIn = if (maxLs >= n - 1) sig else Cat(sig(n - 1, n - maxLs), 1.U(1.W))
+      // leading zeros of sig (sig != 0), saturated at maxLs via a sentinel bit
+      val lz = count(if (maxLs >= n - 1) sig else Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
       val room = ex - 1.S
       val roomSat = Mux(gtConst(ex, n + 1), n.U, room.asUInt(roomW - 1, 0)) // room > n
       // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
       val rAmt = 1.S - ex
       val rSat = Mux(ltConst(ex, -j), (j + 1).U, rAmt.asUInt(log2Ceil(j + 2) - 1, 0)) // rAmt > j + 1
-      (sig, ex, leftCase, lzIn, roomSat, rSat)
+      (sig, ex, leftCase, lz, roomSat, rSat)
     }
     def normLz(r: RoundIn, sig: UInt, ex: SInt, leftCase: Bool, lz: UInt, roomSat: UInt, rSat: UInt): NormLz = {
       val o = Wire(new NormLz(n, w, lz.getWidth max roomSat.getWidth, rSat.getWidth))
@@ -244,12 +246,11 @@ object Fp {
       o
     }
     val lzd = if (!lzSplit) pipe.step(x, lzLevels max (Depth.carry(w) + 1)) { r =>
-      val (sig, ex, leftCase, lzIn, roomSat, rSat) = front(r)
-      normLz(r, sig, ex, leftCase, lzc(lzIn), roomSat, rSat)
+      val (sig, ex, leftCase, lz, roomSat, rSat) = front(r)(lzc)
+      normLz(r, sig, ex, leftCase, lz, roomSat, rSat)
     } else {
       val blocks = pipe.step(x, Depth.lzc(lzBlock, pipe.lutInputs) max (Depth.carry(w) + 1)) { r =>
-        val (sig, ex, leftCase, lzIn, roomSat, rSat) = front(r)
-        val bs = lzcBlocks(lzIn, lzBlock)
+        val (sig, ex, leftCase, bs, roomSat, rSat) = front(r)(lzcBlocks(_, lzBlock))
         val o = Wire(new NormLzBlocks(n, w, bs.length, log2Ceil(lzBlock), rSat.getWidth, roomW))
         o.sign := r.sign; o.exp := ex; o.sig := sig; o.room := roomSat; o.rSat := rSat; o.leftCase := leftCase
         o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
