@@ -56,7 +56,7 @@ object PlatformRun {
   /** The hit stream as the host captured it, by ray id: each record, how often it came, its fault flags. */
   final case class RtlHits(hits: Hits, seen: Array[Int], overflow: Array[Boolean], readError: Array[Boolean], stepLimit: Array[Boolean])
 
-  private def readHits(dut: SimHarness, received: Long, count: Int): RtlHits = {
+  private def readHits(dut: FirtoolShell[SimHarnessIO], received: Long, count: Int): RtlHits = {
     val r = RtlHits(Hits.empty(count), new Array[Int](count), new Array[Boolean](count), new Array[Boolean](count), new Array[Boolean](count))
     for (k <- 0 until math.min(received, count.toLong).toInt) {
       dut.io.readIdx.poke(k.U)
@@ -176,8 +176,9 @@ object PlatformRun {
     var result: Outcome = null
     val t0 = System.nanoTime()
     val modelWall = (t0 - tModel) / 1e9 // the reference model, the memory image and the input files
-    RawTester.test(new SimHarness(p.copy(maxSteps = None), setup), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
-      CachingAnnotation) ++ build.annotations ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
+    val shell = FirtoolHarness.shell(new SimHarness(p.copy(maxSteps = None), setup), work.resolve("harness"))(_.io)
+    RawTester.test(shell.gen(), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
+      CachingAnnotation) ++ build.withSources(shell.sources) ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
       dut.clock.setTimeout(0)
       dut.io.readIdx.poke(0.U)
       dut.io.rayCount.poke(rays.count.U) // what the host's stream holds

@@ -44,6 +44,30 @@ object SimSetup {
   def capacity(n: Long, floor: Long): Int = pow2(math.max(n, floor))
 }
 
+/** SimHarness's ports, a named type so that the firtool-built harness's shell (FirtoolHarness) has the very same
+  * ports. `memControllers`: one access log per IU cluster's MC, then per node bank.
+  */
+class SimHarnessIO(memControllers: Int) extends Bundle {
+  val lite = Flipped(new AxiLite(RtAccelTop.liteAddrBits))
+  val irq = Output(Bool())
+  val rayCount = Input(UInt(32.W)) // rays the host streams (RAY_COUNT of the batch)
+  val errorSticky = Input(Bool()) // MEM_ERROR_MODE=sticky (DramModel.io.sticky), an input so that one build runs both
+  val received = Output(UInt(32.W))
+  val sent = Output(UInt(32.W))
+  val tlasts = Output(UInt(32.W))   // hit beats that carried TLAST
+  val tlastAt = Output(UInt(32.W))  // the index of the last of them (0 before any)
+  val readIdx = Input(UInt(32.W))
+  val readData = Output(UInt(RtAccelTop.HitBits.W))
+  // per IU cluster: entries readIdx * logWords .. + logWords - 1 of its log, the first lowest
+  // (then per node bank with NODE_BANKS: one log per MC, memControllers)
+  val logCount = Output(Vec(memControllers, UInt(32.W)))
+  val logData = Output(Vec(memControllers, UInt((32 * SimSetup.logWords).W)))
+  // per MC: the lookups its caches turned into refetches of a poisoned line (CachePath.eForced), each as its path
+  // (bit 31: primitive) and its index among that path's lookups; entry readIdx
+  val refetchCount = Output(Vec(memControllers, UInt(32.W)))
+  val refetchData = Output(Vec(memControllers, UInt(32.W)))
+}
+
 /** Simulation-only wrapper: the board top with the rays in a ROM (the host's ray stream), the memory image in a
   * DRAM model (loaded by the host before the run) and the hits captured in a RAM (the host's hit stream), so
   * that a whole scene runs without per-cycle work in Scala. The host side can refuse hits at random
@@ -56,26 +80,7 @@ object SimSetup {
   */
 class SimHarness(p: PlatformParams, s: SimSetup) extends Module {
   val top = Module(new RtAccelTop(p, tapAccesses = s.accessLogCapacity > 0))
-  val io = IO(new Bundle {
-    val lite = Flipped(new AxiLite(top.io.lite.addrBits))
-    val irq = Output(Bool())
-    val rayCount = Input(UInt(32.W)) // rays the host streams (RAY_COUNT of the batch)
-    val errorSticky = Input(Bool()) // MEM_ERROR_MODE=sticky (DramModel.io.sticky), an input so that one build runs both
-    val received = Output(UInt(32.W))
-    val sent = Output(UInt(32.W))
-    val tlasts = Output(UInt(32.W))   // hit beats that carried TLAST
-    val tlastAt = Output(UInt(32.W))  // the index of the last of them (0 before any)
-    val readIdx = Input(UInt(32.W))
-    val readData = Output(UInt(RtAccelTop.HitBits.W))
-    // per IU cluster: entries readIdx * logWords .. + logWords - 1 of its log, the first lowest
-    // (then per node bank with NODE_BANKS: one log per MC, p.memControllers)
-    val logCount = Output(Vec(p.memControllers, UInt(32.W)))
-    val logData = Output(Vec(p.memControllers, UInt((32 * SimSetup.logWords).W)))
-    // per MC: the lookups its caches turned into refetches of a poisoned line (CachePath.eForced), each as its path
-    // (bit 31: primitive) and its index among that path's lookups; entry readIdx
-    val refetchCount = Output(Vec(p.memControllers, UInt(32.W)))
-    val refetchData = Output(Vec(p.memControllers, UInt(32.W)))
-  })
+  val io = IO(new SimHarnessIO(p.memControllers))
   // one DRAM model per memory channel, each holding the whole image (the channel only decides who serves an
   // address) with its own bandwidth and latency; channel k > 0 draws its jitter from its own seed
   val drams = top.memPorts.zipWithIndex.map { case (port, k) =>

@@ -12,12 +12,16 @@ import firrtl2.annotations.Annotation
 final case class VerilatorBuild(name: String, verilatorFlags: Seq[String], cFlags: Seq[String], optFast: Option[String],
                                 jobs: Int = 2) {
   require(name.matches("[a-z0-9]+"), s"a build profile name is lower-case letters and digits (got '$name')")
-  /** The chiseltest annotations of this profile. */
-  def annotations: Seq[Annotation] = {
+  /** The chiseltest annotations of this profile. `sources`: more Verilog files for Verilator (chiseltest keeps one
+    * VerilatorFlags annotation, so they go into this profile's).
+    */
+  def annotations: Seq[Annotation] = withSources(Nil)
+  def withSources(sources: Seq[String]): Seq[Annotation] = {
     // with Verilator's own build the compiler is ours to choose: clang when make deps installed it
     val cxx = VerilatorBuild.compiler.fold("")(c => s" CXX=$c LINK=$c")
     val build = optFast.toSeq.flatMap(o => Seq("--build", "-j", jobs.toString, "-MAKEFLAGS", s"OPT_FAST=$o OPT_GLOBAL=$o$cxx"))
-    Seq(VerilatorCFlags(cFlags)) ++ (if (verilatorFlags.isEmpty && build.isEmpty) Nil else Seq(VerilatorFlags(verilatorFlags ++ build)))
+    val flags = verilatorFlags ++ build ++ sources
+    Seq(VerilatorCFlags(cFlags)) ++ (if (flags.isEmpty) Nil else Seq(VerilatorFlags(flags)))
   }
 }
 

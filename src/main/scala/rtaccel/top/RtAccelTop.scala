@@ -21,6 +21,8 @@ object RtAccelTop {
   val RayBits = 9 * 32
   /** Hit beat: 6 words: id, t, prim, u, v, flags (bit 0 = stack overflow, bit 1 = memory read error, bit 2 = step limit). */
   val HitBits = 6 * 32
+  /** The AXI4-Lite port's address width: the register map's (RegMap.addrBits). */
+  def liteAddrBits: Int = RegMap.addrBits(counterNames)
   /** Counted here, per cycle. */
   val eventNames: Seq[String] = Seq("cycles", "busy_cycles", "rays_in", "hits_out", "stall_iu_arbitration",
     "stall_memory_request", "stall_memory_data", "stall_host_backpressure", "tu_busy_cycles", "batch_cycles")
@@ -81,7 +83,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     val hits = Decoupled(new AxisBeat(RtAccelTop.HitBits))
     val mem = new AxiReadMaster(axiP) // memory channel 0 (the only one unless MEM_CHANNELS > 1)
     val memMore = if (p.memChannels > 1) Some(Vec(p.memChannels - 1, new AxiReadMaster(axiP))) else None // channels 1..
-    val lite = Flipped(new AxiLite(RegMap.addrBits(RtAccelTop.counterNames)))
+    val lite = Flipped(new AxiLite(RtAccelTop.liteAddrBits))
     val irq = Output(Bool())
     val tap = if (tapAccesses) Some(Output(Vec(p.memControllers, Valid(UInt(32.W))))) else None // per IU cluster, then per node bank
   })

@@ -8,7 +8,7 @@ import rtaccel.bvh.{MemoryImage, RefCodec}
 import rtaccel.cache.hw.{CachePath, PolicyTables}
 import rtaccel.cache.policy.{LevelPolicy, Policies, ReplacementPolicy}
 import rtaccel.config.{CacheParams, CachePolicy, RefFormat}
-import rtaccel.mc.{McCases, McHarness}
+import rtaccel.mc.McCases
 import rtaccel.sim.DramConfig
 
 /** The policy tables the RTL indexes, exhaustively against the Scala functions they were built from. */
@@ -74,17 +74,17 @@ class CachePathSpec extends McCases {
   }
 
   def cacheCase(what: String, node: CacheParams, prim: CacheParams, seed: Long, expectBypass: Boolean = false,
-                jitter: Int = 15, readyProb: Double = 0.6, tagged: Int = 0, forward: Boolean = false): Unit =
+                jitter: Int = 15, readyProb: Double = 0.6, tagged: Int = 0, forward: Boolean = false, firtool: Boolean = true): Unit =
     runCase(s"serve image bytes and count like the model: $what", dataBits = 256, tris = 400, nReqs = 260,
       DramConfig(12, 4, 1, randomExtraLatency = jitter, seed = seed.toInt), reqProb = 0.8, readyProb = readyProb, seed = seed,
       refFormat = withLevels, pathFactory = CachePath.factory(node, prim, 4), respBufferBeats = 16, maxCycles = 200000,
-      maxLevel = node.maxLevel, pick = skewed, annotations = Seq(VerilatorBackendAnnotation), // policy tables are slow in treadle
-      tagged = tagged, tagForward = forward,
-      afterRun = (dut: McHarness, refs: Seq[Int], img: MemoryImage) => {
+      maxLevel = node.maxLevel, pick = skewed,
+      tagged = tagged, tagForward = forward, firtool = firtool,
+      afterRun = (io: rtaccel.mc.McHarnessIO, refs: Seq[Int], img: MemoryImage) => {
         // tagged: hits answered under older misses, else the case does not test out-of-order answers
         if (tagged > 0) assert(overtakes > 10, s"only $overtakes answers began ahead of an older request's")
         val m = modelCounts(img, node, prim, refs)
-        for ((name, stats, model) <- Seq(("node", dut.io.counters.nodeCache, m.nodeCache), ("prim", dut.io.counters.primCache, m.primCache))) {
+        for ((name, stats, model) <- Seq(("node", io.counters.nodeCache, m.nodeCache), ("prim", io.counters.primCache, m.primCache))) {
           val (h, mi, b) = (stats.hits.peek().litValue, stats.misses.peek().litValue, stats.bypasses.peek().litValue)
           model match {
             case Some(c) =>
@@ -119,7 +119,10 @@ class CachePathSpec extends McCases {
   if (rtaccel.Regress.full) cacheCase("TAG_FORWARD=1: 2-way LRU node cache + direct-mapped primitive cache", CacheParams(16, 2, CachePolicy.Lru),
     CacheParams(64, 1, CachePolicy.Dm), seed = 41, forward = true)
   cacheCase("TAG_FORWARD=1, RESP_ORDER=tagged, 4 requesters: hybrid node cache (MAX_LEVEL 3) + 2-way LRU primitive cache",
-    CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), seed = 42, tagged = 4, forward = true)
+    CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), seed = 42, tagged = 4, forward = true,
+    // firtool 1.62.1 rejects this circuit ("operand #0 does not dominate this use" at TagArray's write-first RAM; make
+    // verilog of the same cache fails alike, docs/caches.md): chiseltest's firrtl2 path builds it
+    firtool = false)
   if (rtaccel.Regress.full) cacheCase("TAG_FORWARD=1: level policy, 2-way LRU (MAX_LEVEL 1) + 4-way PLRU primitive cache, host always ready",
     CacheParams(16, 2, CachePolicy.Lrp, maxLevel = 1), CacheParams(32, 4, CachePolicy.Plru), seed = 43, expectBypass = true, readyProb = 1.0, forward = true)
   if (rtaccel.Regress.full) cacheCase("DM node + primitive cache, no DRAM jitter, host always ready", CacheParams(16, 1, CachePolicy.Dm), CacheParams(16, 1, CachePolicy.Dm),

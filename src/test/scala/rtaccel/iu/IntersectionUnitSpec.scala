@@ -2,8 +2,6 @@ package rtaccel.iu
 
 import chisel3._
 import chiseltest._
-import chiseltest.internal.CachingAnnotation
-import firrtl2.options.TargetDirAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.collection.mutable
 import scala.util.Random
@@ -34,11 +32,10 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
   import IntersectionUnitSpec._
   private def fbits(f: Float): Int = java.lang.Float.floatToRawIntBits(f)
   private def u32(i: Int): BigInt = BigInt(i & 0xffffffffL)
-  // Verilator: M box tests and a Möller–Trumbore pipeline with a divider are far too slow in treadle.
-  private def sim(p: PlatformParams, beatBits: Int) = {
+  // Verilator (firtool-built): M box tests and a Möller–Trumbore pipeline with a divider are far too slow in treadle.
+  private def folder(p: PlatformParams, beatBits: Int) = {
     val r = p.refs
-    rtaccel.TestSim.quick ++ Seq(CachingAnnotation, TargetDirAnnotation(
-      s"test_run_dir/IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}${if (p.respByPath) s"-r${p.respOrder}" else ""}${if (p.rayStore) "-store" else ""}-o0"))
+    s"IntersectionUnitSpec/tus${p.tus}-m${p.m}-beat$beatBits-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-div${p.divStages}${if (p.nodeQuantBits > 0) s"-q${p.nodeQuantBits}" else ""}${if (p.respByPath) s"-r${p.respOrder}" else ""}${if (p.rayStore) "-store" else ""}"
   }
 
   private def soupImage(seed: Long, p0: PlatformParams, fit: Boolean): MemoryImage = {
@@ -72,7 +69,8 @@ class IntersectionUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     assert(leafRefs.exists(codec.count(_) > 1), "the image needs leaves of several primitives")
     val rays = TestScenes.rays(seed, 512)
     var st = Stats(0, 0, 0, 0, 0, 0, 0, 0, 0, 0)
-    test(new IntersectionUnit(p, beatBits, p.tus)).withAnnotations(sim(p, beatBits)) { dut =>
+    val iu = rtaccel.TestSim.firtool(folder(p, beatBits))(new IntersectionUnit(p, beatBits, p.tus))(_.io)
+    test(iu.gen()).withAnnotations(iu.annotations) { dut =>
       dut.clock.setTimeout(0)
       var cycle = 0L
       def fail(what: String): Nothing = throw new AssertionError(s"$what (seed $seed, cycle $cycle)")

@@ -55,8 +55,9 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}, PIPELINE=${pl.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
     val pb = p.copy(boxFormat = bf, triTest = tt, pipelining = pl)
     val outward = if (bf == FpFormat.fp32) None else Some(new RayBoxOutward(bf, pb.boxSlackUlps))
-    test(new BoxPipe(pb.pipes)).withAnnotations(rtaccel.TestSim.quick) { dut =>
-      val lat = dut.latency
+    val box = rtaccel.TestSim.firtool(s"IuPipesSpec/box-${bf.name}-${tt.name}-${pl.name}")(new BoxPipe(pb.pipes))(_.io)
+    test(box.gen()).withAnnotations(box.annotations) { dut =>
+      val lat = box.module.latency
       if (pl == fixed) assert(lat == 4, s"PIPELINE=none keeps the four stages (latency $lat)")
       else assert(lat > 4, s"PIPELINE=${pl.name} adds registers (latency $lat)")
       info(s"latency $lat cycles")
@@ -114,13 +115,15 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   /** One triangle pipe against its model, `n` jobs back to back: random and degenerate primitives, and (for the
     * watertight test) near ties that take the binary64 path.
     */
-  private def triPipeTest[T <: Module](name: String, n: Int, pipe: => T, latency: T => Int, io: T => (Valid[TriJob], Valid[TriResult]),
+  private type TriPorts = Bundle { val in: Valid[TriJob]; val out: Valid[TriResult] }
+  private def triPipeTest[T <: Module](name: String, n: Int, pipe: => T, latency: T => Int, io: T => TriPorts,
                                       model: (PreparedRay, Float, Array[Float], RayTriangle.Result) => Boolean, ties: Boolean,
-                                      wide: Boolean = false, annos: Seq[firrtl2.annotations.Annotation] = Nil): Unit =
+                                      wide: Boolean = false, build: rtaccel.sim.VerilatorBuild = rtaccel.sim.VerilatorBuild.quick): Unit =
     test(s"$name == its model on $n random and degenerate primitives, one per cycle") {
-      test(pipe).withAnnotations(rtaccel.TestSim.quick ++ annos) { dut =>
-        val (in, outIo) = io(dut)
-        val lat = latency(dut)
+      val built = rtaccel.TestSim.firtool(s"IuPipesSpec/${name.filter(_.isLetterOrDigit)}", build)(pipe)(io)
+      test(built.gen()).withAnnotations(built.annotations) { dut =>
+        val (in, outIo) = (dut.io.in, dut.io.out)
+        val lat = latency(built.module)
         info(s"latency $lat cycles")
         val expected = scala.collection.mutable.Queue[(Boolean, Seq[BigInt], Boolean)]()
         val out = new RayTriangle.Result
@@ -172,16 +175,16 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
       }
     }
 
-  triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=auto)", 20000, new TriPipe(p.pipes), _.latency, d => (d.io.in, d.io.out),
+  triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=auto)", 20000, new TriPipe(p.pipes), _.latency, _.io,
     (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
   private val watertight = new rtaccel.model.RayTriangleWatertight
   for (pl <- Seq(deep) ++ (if (regress) Seq(auto, fixed) else Nil)) {
     val pp = p.copy(pipelining = pl)
     triPipeTest[WatertightPipe](s"watertight pipe (WatertightPipe, PIPELINE=${pl.name})", 20000, new WatertightPipe(pp.pipes), _.latency,
-      d => (d.io.in, d.io.out), (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true)
+      _.io, (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true)
   }
   if (regress) triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=none)", 20000, new TriPipe(p.copy(pipelining = fixed).pipes),
-    d => { assert(d.latency == 8 + p.divStages, "PIPELINE=none keeps 8 + divStages"); d.latency }, d => (d.io.in, d.io.out),
+    d => { assert(d.latency == 8 + p.divStages, "PIPELINE=none keeps 8 + divStages"); d.latency }, _.io,
     (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
   // TRI_FORMAT: the pipe in a wider format against the SoftFloat twin (fp64 in make test; e8m31, the same exponent
   // as fp32, in make regress: each is a Verilator build, compiled without C++ optimisation: the wide multipliers and
@@ -189,7 +192,7 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   for ((tf, pl) <- Seq((FpFormat.fp64, fixed)) ++ (if (regress) Seq((FpFormat(8, 31), auto), (FpFormat.fp64, auto)) else Nil)) {
     val pw = p.copy(triFormat = tf, pipelining = pl); val twin = new rtaccel.model.RayTriangleWide(tf)
     triPipeTest[TriPipe](s"Möller–Trumbore pipe at TRI_FORMAT=${tf.name}, PIPELINE=${pl.name}", 20000, new TriPipe(pw.pipes), _.latency,
-      d => (d.io.in, d.io.out), (r, tmax, v, o) => twin.testSoft(r, tmax, v(0), v(1), v(2), v(3), v(4), v(5), v(6), v(7), v(8), o),
-      ties = false, wide = true, annos = rtaccel.sim.VerilatorBuild("o0", Nil, Seq("-O0"), Some("-O0"), jobs = 1).annotations)
+      _.io, (r, tmax, v, o) => twin.testSoft(r, tmax, v(0), v(1), v(2), v(3), v(4), v(5), v(6), v(7), v(8), o),
+      ties = false, wide = true, build = rtaccel.sim.VerilatorBuild("o0", Nil, Seq("-O0"), Some("-O0"), jobs = 1))
   }
 }

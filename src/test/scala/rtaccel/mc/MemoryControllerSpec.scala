@@ -26,6 +26,20 @@ class StallingPath(g: McGeometry, seed: Int) extends FetchPathModule(g) {
   io.stats := 0.U.asTypeOf(io.stats)
 }
 
+/** McHarness's ports (named, so that a test's check after the run takes them from the firtool-built shell). */
+class McHarnessIO(p: PlatformParams, axi: AxiParams) extends Bundle {
+  val req = Flipped(chisel3.util.Decoupled(new FetchReq(p.respTagBits)))
+  val resp = chisel3.util.Decoupled(new FetchBeat(axi.dataBits, p.respTagBits))
+  val primResp = if (p.respByPath) Some(chisel3.util.Decoupled(new FetchBeat(axi.dataBits, p.respTagBits))) else None
+  val primBase = Input(UInt(axi.addrBits.W))
+  val maxLevel = Input(UInt(4.W))
+  val counters = Output(new McCounters(p.hw.mcCounterBits))
+  val arBursts = Output(UInt(32.W))
+  val maxLen = Output(UInt(8.W))
+  val badBurst = Output(Bool())
+  val overtaken = Output(UInt(32.W))
+}
+
 /** MC + DRAM model, with AR/R traffic counters for the test. */
 class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, cfg: DramConfig,
                 pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
@@ -34,18 +48,7 @@ class McHarness(p: PlatformParams, val axi: AxiParams, words: Int, hex: String, 
   val dram = Module(new DramModel(axi, words, hex, cfg))
   dram.io.axi <> mc.io.axi
   dram.io.sticky := errorSticky.B
-  val io = IO(new Bundle {
-    val req = Flipped(chisel3.util.Decoupled(new FetchReq(p.respTagBits)))
-    val resp = chisel3.util.Decoupled(new FetchBeat(axi.dataBits, p.respTagBits))
-    val primResp = if (p.respByPath) Some(chisel3.util.Decoupled(new FetchBeat(axi.dataBits, p.respTagBits))) else None
-    val primBase = Input(UInt(axi.addrBits.W))
-    val maxLevel = Input(UInt(4.W))
-    val counters = Output(new McCounters(p.hw.mcCounterBits))
-    val arBursts = Output(UInt(32.W))
-    val maxLen = Output(UInt(8.W))
-    val badBurst = Output(Bool())
-    val overtaken = Output(UInt(32.W))
-  })
+  val io = IO(new McHarnessIO(p, axi))
   // Cycles in which DRAM delivers a beat for a different path than the one the response mux waits on
   // (RESP_ORDER=request; with RESP_ORDER=path there is no single awaited path, and the count stays 0).
   import chisel3.util.experimental.BoringUtils
@@ -98,9 +101,9 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               pathFactory: (McGeometry, Int) => FetchPathModule = FetchPath.passThrough,
               respBufferBeats: Int = 0, maxCycles: Int = 30000, maxLevel: Int = 15,
               pick: (Random, IndexedSeq[Int]) => Int = (r, pool) => pool(r.nextInt(pool.length)),
-              afterRun: (McHarness, Seq[Int], MemoryImage) => Unit = (_, _, _) => (),
-              annotations: firrtl2.AnnotationSeq = rtaccel.TestSim.quick, respByPath: Boolean = false, tagged: Int = 0,
-              tagForward: Boolean = false, memRetries: Int = -1, errorSticky: Boolean = true): Unit =
+              afterRun: (McHarnessIO, Seq[Int], MemoryImage) => Unit = (_, _, _) => (),
+              respByPath: Boolean = false, tagged: Int = 0,
+              tagForward: Boolean = false, memRetries: Int = -1, errorSticky: Boolean = true, firtool: Boolean = true): Unit =
     it should name in {
       val axi = AxiParams(dataBits = dataBits)
       val img = image(seed, tris, refFormat)
@@ -156,7 +159,8 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
       val inFlight = Array.fill(math.max(1, tagged))(-1)
       val underWay = Array.fill(streams.length)(Option.empty[(Int, Int, Int)])
       var tag = 0
-      test(new McHarness(p, axi, lay.words, hex.toString, cfg, pathFactory, respBufferBeats, errorSticky)).withAnnotations(annotations) { dut =>
+      def harness = new McHarness(p, axi, lay.words, hex.toString, cfg, pathFactory, respBufferBeats, errorSticky)
+      def drive(dut: { def io: McHarnessIO; def clock: Clock }): Unit = {
         dut.clock.setTimeout(0)
         dut.io.primBase.poke(lay.primBaseBytes.U)
         dut.io.maxLevel.poke(maxLevel.U)
@@ -238,8 +242,12 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
         if (tagged > 0) info(s"$overtook answers began ahead of an older request's on their port")
         else if (respByPath) info(s"$overtook node beats left ahead of an older unanswered leaf")
         overtakes = overtook
-        afterRun(dut, refs, img)
+        afterRun(dut.io, refs, img)
       }
+      if (firtool) {
+        val mc = rtaccel.TestSim.firtool(s"MemoryControllerSpec/${name.filter(_.isLetterOrDigit).take(80)}")(harness)(_.io)
+        test(mc.gen()).withAnnotations(mc.annotations)(drive(_))
+      } else test(harness).withAnnotations(rtaccel.TestSim.quick)(drive(_))
     }
 }
 
@@ -278,7 +286,7 @@ class MemoryControllerSpec extends McCases {
     dataBits = 256, tris = 300, nReqs = 80, DramConfig(8, 8, 1, randomExtraLatency = 5), reqProb = 0.9,
     readyProb = 0.5, seed = 24, respBufferBeats = 40, maxCycles = 6000,
     pathFactory = (g, i) => if (i == FetchPath.Node) new StallingPath(g, 0x5a) else new FetchPath(g),
-    afterRun = (dut, _, _) => assert(dut.io.overtaken.peek().litValue > 0, "the stalling path did not reorder DRAM traffic"))
+    afterRun = (io, _, _) => assert(io.overtaken.peek().litValue > 0, "the stalling path did not reorder DRAM traffic"))
 
   behavior of "MemoryController with RESP_ORDER=path"
 

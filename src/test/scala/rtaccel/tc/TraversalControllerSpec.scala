@@ -2,9 +2,6 @@ package rtaccel.tc
 
 import chisel3._
 import chiseltest._
-import chiseltest.internal.CachingAnnotation
-import chiseltest.simulator.{VerilatorBackendAnnotation, VerilatorCFlags}
-import firrtl2.options.TargetDirAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.collection.mutable
 import scala.util.Random
@@ -24,10 +21,12 @@ object TraversalControllerSpec {
   * TU is free, and every TU result leaves exactly once, unchanged.
   */
 class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
-  // Verilator: the three dividers run at ~35 cycles/s in treadle. One build per circuit, shared by the tests
-  // that use it (CachingAnnotation keyed on the circuit, in a folder named after its parameters).
-  private def sim(p: PlatformParams) = Seq(VerilatorBackendAnnotation, VerilatorCFlags(Seq("-O1")), CachingAnnotation,
-    TargetDirAnnotation(s"test_run_dir/TraversalControllerSpec/tus${p.tus}-div${p.divStages}-pipe${p.pipelining.name}"))
+  // Verilator: the three dividers run at ~35 cycles/s in treadle.
+  private def folder(p: PlatformParams) = s"TraversalControllerSpec/tus${p.tus}-div${p.divStages}-pipe${p.pipelining.name}"
+  /** The TC of `p` built by firtool (TestSim.firtool), one build per circuit shared by the tests that use it. */
+  private type Dut = rtaccel.sim.FirtoolShell[Bundle { val in: chisel3.util.DecoupledIO[HostRay]; val out: chisel3.util.DecoupledIO[rtaccel.tu.TuResult]
+    val tuRay: Vec[chisel3.util.DecoupledIO[rtaccel.tu.TuRay]]; val tuResult: Vec[chisel3.util.DecoupledIO[rtaccel.tu.TuResult]] }]
+  private def tc(p: PlatformParams) = rtaccel.TestSim.firtool(folder(p))(new TraversalController(p))(_.io)
   /** The divider with `div` register levels where the stages spread them (PIPELINE=none). */
   private def fixed(tus: Int, div: Int) = PlatformParams(tus = tus, divStages = div, pipelining = rtaccel.config.Pipelining.Fixed)
   private def bits(f: Float): Long = java.lang.Float.floatToRawIntBits(f).toLong & 0xffffffffL
@@ -56,13 +55,13 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
     }
   }
 
-  private def pokeRay(dut: TraversalController, r: HostRay): Unit = {
+  private def pokeRay(dut: Dut, r: HostRay): Unit = {
     dut.io.in.bits.id.poke(r.id.U)
     for (k <- 0 until 8) dut.io.in.bits.f(k).poke(bits(r.f(k)).U)
   }
 
   /** The prepared ray on TU port i must be host ray r, with the model's reciprocals. */
-  private def checkPrepared(dut: TraversalController, i: Int, r: HostRay, what: String): Unit = {
+  private def checkPrepared(dut: Dut, i: Int, r: HostRay, what: String): Unit = {
     val want = new PreparedRay(r.f(0), r.f(1), r.f(2), r.f(3), r.f(4), r.f(5), r.f(6), r.f(7))
     val t = dut.io.tuRay(i).bits
     def eq(got: BigInt, w: Long, name: String) =
@@ -94,7 +93,8 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
     val rays = hostRays(seed, n)
     val rnd = new Random(seed * 7919 + 1)
     var cycles = 0L
-    test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
+    val built = tc(p)
+    test(built.gen()).withAnnotations(built.annotations) { dut =>
       sealed trait TuState
       case class Free(from: Long) extends TuState
       case class Busy(r: HostRay, until: Long) extends TuState
@@ -115,7 +115,7 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
       var lastOffer = false; var lastOutReady = false; var poked = -1
       // the TUs free as the TC sees them: this cycle's, or (PIPELINE) those free readyLag cycles ago and sent no ray
       // since (the last readyLag cycles' free TUs and rays sent, newest last)
-      val lag = dut.readyLag
+      val lag = built.module.readyLag
       val pastFree = mutable.Queue.fill(lag)(Seq.empty[Int]); val pastFired = mutable.Queue.fill(lag)(Seq.empty[Int])
       while (out.size < n) {
         assert(cycle < 200L * n + 1000, s"seed $seed: only ${out.size} of $n results after $cycle cycles")
@@ -150,7 +150,7 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
         assert(fires.length <= 1, s"$what: rays handed to TUs ${fires.mkString(",")} at once")
         val seen = if (lag == 0) freeIdx.toSeq else pastFree.head.filterNot(i => pastFired.exists(_.contains(i)))
         if (lag > 0) { pastFree.dequeue(); pastFree.enqueue(freeIdx.toSeq); pastFired.dequeue(); pastFired.enqueue(fires) }
-        val readyAt = accepted.headOption.map(_._2 + dut.dispatchLatency)
+        val readyAt = accepted.headOption.map(_._2 + built.module.dispatchLatency)
         if (seen.nonEmpty && readyAt.exists(_ <= cycle))
           assert(fires.nonEmpty, s"$what: a prepared ray waits while TUs ${seen.mkString(",")} are free")
         for (i <- fires) {
@@ -165,7 +165,7 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
         // with PIPELINE's tree (queues between its levels) a taken result leaves later, unchanged and exactly once
         val outValid = dut.io.out.valid.peek().litToBoolean
         val taken = (0 until p.tus).filter(i => lastValid(i) && dut.io.tuResult(i).ready.peek().litToBoolean)
-        val flat = dut.arb.depth == 0
+        val flat = built.module.arb.depth == 0
         for (i <- taken if !flat) { tus(i) match { case Done(r) => inTree(r.id) = r; case _ => }
           tus(i) = Free(cycle + 1 + (if (rnd.nextInt(4) == 0) rnd.nextInt(3) else 0)) }
         if (outValid && outReady) {
@@ -202,7 +202,8 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
 
   test("reciprocals of every special direction component, bit-exact (all 19 specials on each axis)") {
     val p = fixed(5, 6)
-    test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
+    val built = tc(p)
+    test(built.gen()).withAnnotations(built.annotations) { dut =>
       val rays = specials.indices.map { i =>
         HostRay(i.toLong, Array(1f, 2f, 3f, specials(i), specials((i + 7) % specials.length), specials((i + 13) % specials.length), 0f, 1f))
       }
@@ -227,7 +228,8 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
     // the divider has divStages cycles (PIPELINE=none), dz enters it two cycles after the ray, and the ray queue is a
     // cycle: a ray accepted at cycle 3k reaches TU 0 at 3k + divStages + 3
     val first = p.divStages + 3
-    test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
+    val built = tc(p)
+    test(built.gen()).withAnnotations(built.annotations) { dut =>
       for (i <- 0 until p.tus) { dut.io.tuRay(i).ready.poke(true.B); dut.io.tuResult(i).valid.poke(false.B) }
       dut.io.out.ready.poke(true.B)
       var got = 0
@@ -252,7 +254,8 @@ class TraversalControllerSpec extends AnyFunSuite with ChiselScalatestTester {
   test("all TUs busy: the TC takes exactly as many rays as its queue holds, loses none, then hands them out in order") {
     val p = fixed(3, 0)
     val rays = hostRays(12, 40)
-    test(new TraversalController(p)).withAnnotations(sim(p)) { dut =>
+    val built = tc(p)
+    test(built.gen()).withAnnotations(built.annotations) { dut =>
       for (i <- 0 until p.tus) { dut.io.tuRay(i).ready.poke(false.B); dut.io.tuResult(i).valid.poke(false.B) }
       dut.io.out.ready.poke(true.B)
       var next = 0

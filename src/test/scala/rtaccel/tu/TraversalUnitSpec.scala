@@ -2,9 +2,6 @@ package rtaccel.tu
 
 import chisel3._
 import chiseltest._
-import chiseltest.internal.CachingAnnotation
-import chiseltest.simulator.{VerilatorBackendAnnotation, VerilatorCFlags}
-import firrtl2.options.TargetDirAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.collection.mutable
 import scala.util.Random
@@ -63,13 +60,11 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
 
   // ---------------------------------------------------------------- the TU with the test playing the IU
 
-  // Verilator: the TU's float comparators (its tmax culls) are slow in treadle.
-  // One build per circuit (the TU depends on M, the stack depth and the reference layout), shared by the
-  // tests that use it.
-  private def sim(p: PlatformParams) = {
+  // Verilator: the TU's float comparators (its tmax culls) are slow in treadle. One build per circuit (the TU
+  // depends on M, the stack depth and the reference layout; TestSim.firtool), shared by the tests that use it.
+  private def folder(p: PlatformParams) = {
     val r = p.refs
-    Seq(VerilatorBackendAnnotation, VerilatorCFlags(Seq("-O1")), CachingAnnotation, TargetDirAnnotation(
-      s"test_run_dir/TraversalUnitSpec/m${p.m}-stack${p.stackDepth}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-tus${p.tus}-short${p.shortStack}.${p.treeLevels}"))
+    s"TraversalUnitSpec/m${p.m}-stack${p.stackDepth}-refs${r.nodeIdBits}.${r.primIndexBits}.${r.countBits}.${r.levelBits}-tus${p.tus}-short${p.shortStack}.${p.treeLevels}"
   }
 
   /** Runs the rays through one TU (its index port = `index`). nodeBad / primBad: the node ids and primitive
@@ -86,7 +81,8 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     var cycle = 0L
     def garbage(): Int = rnd.nextInt()
     def fail(what: String): Nothing = throw new AssertionError(s"$what (seed $seed, cycle $cycle, ray ${recs.length})")
-    test(new TraversalUnit(p)).withAnnotations(sim(p)) { dut =>
+    val tu = rtaccel.TestSim.firtool(folder(p))(new TraversalUnit(p))(_.io)
+    test(tu.gen()).withAnnotations(tu.annotations) { dut =>
       dut.clock.setTimeout(0)
       dut.io.index.poke(index.U)
       dut.io.maxSteps.poke(p.stepLimit.U) // the MAX_STEPS register's value after reset
