@@ -15,19 +15,21 @@ class VerilogLintSpec extends AnyFunSuite {
   // the cached ones cover the DM, LRU, PLRU and hybrid (LRP) families, on both paths; one circuit carries every
   // precision and stack option at once (outward-rounded boxes, the watertight test, q8 nodes, packed leaves with a
   // leaf-row cache line, the short stack); make regress adds M=8, the breadth-first buffer and each option on its own.
-  // Each case is an elaboration, firtool and a lint of a whole platform: make test's four carry every option between them.
+  // Each case is an elaboration, firtool and a lint of a whole platform: make test's three carry every option between them.
   private val cases = Seq(("paper2017", 4, 32, "--node-cache 8192 --prim-cache 1024 --prim-ways 2"),
       // (with one lookup per cycle: write-first tag RAMs in both of the hybrid's arrays and the PLRU's)
-      ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru --tag-forward 1"),
-      // (and two response streams, with the packed leaves' LeafAssembler on the leaf stream)
-      ("small", 4, 2, "--box-format bf16 --tri-test watertight --node-format q8 --node-cache 64 --prim-format packed --prim-cache 64 --prim-ways 2 --short-stack 4 --resp-order path"),
-      // tagged answers: clean hits beside the tickets in both caches, the IU's job tables, and the ray stores of
-      // four clusters of one TU each over 2 channels (the TC's writes routed by cluster); NODE_BANKS: one node cache
-      // in 4 banks for the 4 clusters (both crossbars wider than one), one lookup per cycle
-      ("small", 4, 4, "--resp-order tagged --ray-store 1 --ius 4 --mem-channels 2 --node-banks 4 --tag-forward 1 --node-cache 64 --node-ways 2 --prim-cache 64 --prim-ways 2")) ++
+      // (and two response streams in request order each)
+      ("paper2017-lrp", 4, 2, "--node-cache 256 --node-policy hybrid --max-level 4 --prim-cache 256 --prim-ways 4 --prim-policy plru --tag-forward 1 --resp-order path"),
+      // every precision and stack option (the packed leaves' LeafAssembler on the leaf stream) with tagged answers:
+      // clean hits beside the tickets in both caches, the IU's job tables, and the ray stores of four clusters of one
+      // TU each over 2 channels (the TC's writes routed by cluster); NODE_BANKS: one node cache in 4 banks for the 4
+      // clusters (both crossbars wider than one), one lookup per cycle
+      ("small", 4, 4, "--box-format bf16 --tri-test watertight --node-format q8 --prim-format packed --short-stack 4 " +
+        "--resp-order tagged --ray-store 1 --ius 4 --mem-channels 2 --node-banks 4 --tag-forward 1 --node-cache 64 --node-ways 2 --prim-cache 64 --prim-ways 2")) ++
     (if (!regress) Nil else Seq(("paper2017", 4, 32, ""), ("paper2017", 4, 8, "--node-cache 8192 --prim-cache 1024 --prim-ways 2"),
       ("small", 4, 4, "--ius 4 --mem-channels 2 --node-cache 64 --prim-cache 64 --prim-ways 2"), // request order over the channels
       ("small", 4, 4, "--resp-order tagged --ray-store 1 --ius 2 --node-banks 4 --tag-forward 1 --node-cache 64 --node-ways 2 --prim-cache 64 --prim-ways 2"),
+      ("small", 4, 2, "--box-format bf16 --tri-test watertight --node-format q8 --node-cache 64 --prim-format packed --prim-cache 64 --prim-ways 2 --short-stack 4 --resp-order path"),
       ("small", 2, 1, ""), ("paper2017-lrp", 8, 2, ""), ("small", 4, 1, "--node-cache 64 --node-policy bf"),
       ("paper2017-lrp", 2, 1, "--node-cache 64 --node-ways 4 --node-policy lrp --max-level 2"),
       ("small", 4, 2, "--box-format bf16 --short-stack 4"), ("small", 4, 2, "--tri-test watertight"),
