@@ -316,7 +316,7 @@ class PlatformSpec extends AnyFunSuite {
   // IUS clusters (docs/architecture.md): each cluster's caches see only its own TUs' accesses, so the counts equal
   // the model replaying each cluster's log through its own caches; both clusters must have worked.
   // MEM_CHANNELS: each channel its own DRAM model (own jitter). make test runs IUS=2 over 2 channels in its
-  // RESP_ORDER=path case below (one circuit for the three); make regress each here with request order.
+  // NODE_BANKS case below (one circuit for them all); make regress each here with request order.
   private val iusCases = if (!full) Nil else Seq((2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
       (2, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35),
       (1, 2, 4, CacheParams(), CacheParams(), 17, 0), (1, 4, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 23, 10),
@@ -330,11 +330,11 @@ class PlatformSpec extends AnyFunSuite {
 
   // RESP_ORDER=path and tagged (docs/platform.md): node and leaf responses in two streams (tagged: each in any
   // order, hits under misses); bit-exact, and the caches' counts still equal the model replaying the RTL's own
-  // order. make test: IUS=2 over MEM_CHANNELS=2 with caches under jitter and backpressure for path (the clusters and
-  // channels case of make test too); tagged in the NODE_BANKS case below (with RAY_STORE=1).
+  // order. make test: tagged in the NODE_BANKS case below (with RAY_STORE=1 and two clusters over MEM_CHANNELS=2); the
+  // path order at the IU (IntersectionUnitSpec) and the MC (MemoryControllerSpec); make regress here.
   private val (path, tagged) = (RespOrder.Path, RespOrder.Tagged)
-  private val pathCases = Seq((path, 2, 2, if (full) 8 else 4, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
-    (if (!full) Nil else Seq((tagged, 1, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30),(path, 1, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
+  private val pathCases = if (!full) Nil else Seq((path, 2, 2, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 31, 35)) ++
+    (Seq((tagged, 1, 1, 8, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 29, 30),(path, 1, 1, 4, CacheParams(), CacheParams(), 17, 20), (path, 1, 1, 4, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 23, 10),
       (path, 2, 1, 4, CacheParams(), CacheParams(), 0, 0), (tagged, 1, 1, 4, CacheParams(), CacheParams(), 17, 20),
       (tagged, 2, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 1, CachePolicy.Dm), 41, 25),
       (tagged, 1, 1, 8, CacheParams(32, 1, CachePolicy.Hybrid), CacheParams(16, 4, CachePolicy.Plru), 0, 0)))
@@ -367,14 +367,15 @@ class PlatformSpec extends AnyFunSuite {
 
   // NODE_BANKS=k (docs/caches.md, "Shared node cache"): one node cache for every cluster, in banks behind a crossbar;
   // the banks' counts equal the banked trace model replaying each bank's own order, and the platform stays bit-exact.
-  // make test: two clusters on two banks with one lookup per cycle and the rays in the clusters' stores (RAY_STORE=1:
-  // the TC's write goes to the right cluster's store), jitter and backpressure; make regress: more banks than
+  // make test: two clusters on two banks over two memory channels with one lookup per cycle and the rays in the
+  // clusters' stores (RAY_STORE=1: the TC's write goes to the right cluster's store), jitter and backpressure; make
+  // regress: the same on one channel, more banks than
   // clusters (hybrid), one bank for four clusters, two memory channels, each without the store.
   // The make test case's DRAM poisons beats (docs/platform.md, "Memory errors"): transient, so every read error is
   // re-read and the run stays bit-exact with the fault-free model, then sticky on the same circuit, where exactly the
   // model's rays are flagged: re-reads and poison refetches under two clusters, banks and tagged answers.
   private val bankErrorRate = 0.003
-  private val bankCases = Seq((2, 2, 1, if (full) 8 else 4, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true, !full)) ++
+  private val bankCases = Seq((2, 2, if (full) 1 else 2, if (full) 8 else 4, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true, !full)) ++
     (if (!full) Nil else Seq((2, 4, 1, 8, CacheParams(128, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(16, 2, CachePolicy.Lru), 23, 30, false, false),
       (4, 1, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 0, 0, true, false),
       (2, 2, 2, 4, CacheParams(64, 2, CachePolicy.Lru), CacheParams(32, 1, CachePolicy.Dm), 17, 20, false, false)))
