@@ -74,12 +74,12 @@ class CachePathSpec extends McCases {
   }
 
   def cacheCase(what: String, node: CacheParams, prim: CacheParams, seed: Long, expectBypass: Boolean = false,
-                jitter: Int = 15, readyProb: Double = 0.6, tagged: Int = 0, forward: Boolean = false, firtool: Boolean = true): Unit =
+                jitter: Int = 15, readyProb: Double = 0.6, tagged: Int = 0, forward: Boolean = false): Unit =
     runCase(s"serve image bytes and count like the model: $what", dataBits = 256, tris = 400, nReqs = 260,
       DramConfig(12, 4, 1, randomExtraLatency = jitter, seed = seed.toInt), reqProb = 0.8, readyProb = readyProb, seed = seed,
       refFormat = withLevels, pathFactory = CachePath.factory(node, prim, 4), respBufferBeats = 16, maxCycles = 200000,
       maxLevel = node.maxLevel, pick = skewed,
-      tagged = tagged, tagForward = forward, firtool = firtool,
+      tagged = tagged, tagForward = forward,
       afterRun = (io: rtaccel.mc.McHarnessIO, refs: Seq[Int], img: MemoryImage) => {
         // tagged: hits answered under older misses, else the case does not test out-of-order answers
         if (tagged > 0) assert(overtakes > 10, s"only $overtakes answers began ahead of an older request's")
@@ -119,10 +119,7 @@ class CachePathSpec extends McCases {
   if (rtaccel.Regress.full) cacheCase("TAG_FORWARD=1: 2-way LRU node cache + direct-mapped primitive cache", CacheParams(16, 2, CachePolicy.Lru),
     CacheParams(64, 1, CachePolicy.Dm), seed = 41, forward = true)
   cacheCase("TAG_FORWARD=1, RESP_ORDER=tagged, 4 requesters: hybrid node cache (MAX_LEVEL 3) + 2-way LRU primitive cache",
-    CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), seed = 42, tagged = 4, forward = true,
-    // firtool 1.62.1 rejects this circuit ("operand #0 does not dominate this use" at TagArray's write-first RAM; make
-    // verilog of the same cache fails alike, docs/caches.md): chiseltest's firrtl2 path builds it
-    firtool = false)
+    CacheParams(32, 1, CachePolicy.Hybrid, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), seed = 42, tagged = 4, forward = true)
   if (rtaccel.Regress.full) cacheCase("TAG_FORWARD=1: level policy, 2-way LRU (MAX_LEVEL 1) + 4-way PLRU primitive cache, host always ready",
     CacheParams(16, 2, CachePolicy.Lrp, maxLevel = 1), CacheParams(32, 4, CachePolicy.Plru), seed = 43, expectBypass = true, readyProb = 1.0, forward = true)
   if (rtaccel.Regress.full) cacheCase("DM node + primitive cache, no DRAM jitter, host always ready", CacheParams(16, 1, CachePolicy.Dm), CacheParams(16, 1, CachePolicy.Dm),

@@ -103,7 +103,7 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
               pick: (Random, IndexedSeq[Int]) => Int = (r, pool) => pool(r.nextInt(pool.length)),
               afterRun: (McHarnessIO, Seq[Int], MemoryImage) => Unit = (_, _, _) => (),
               respByPath: Boolean = false, tagged: Int = 0,
-              tagForward: Boolean = false, memRetries: Int = -1, errorSticky: Boolean = true, firtool: Boolean = true): Unit =
+              tagForward: Boolean = false, memRetries: Int = -1, errorSticky: Boolean = true): Unit =
     it should name in {
       val axi = AxiParams(dataBits = dataBits)
       val img = image(seed, tris, refFormat)
@@ -244,10 +244,8 @@ trait McCases extends AnyFlatSpec with ChiselScalatestTester {
         overtakes = overtook
         afterRun(dut.io, refs, img)
       }
-      if (firtool) {
-        val mc = rtaccel.TestSim.firtool(s"MemoryControllerSpec/${name.filter(_.isLetterOrDigit).take(80)}")(harness)(_.io)
-        test(mc.gen()).withAnnotations(mc.annotations)(drive(_))
-      } else test(harness).withAnnotations(rtaccel.TestSim.quick)(drive(_))
+      val mc = rtaccel.TestSim.firtool(s"MemoryControllerSpec/${name.filter(_.isLetterOrDigit).take(80)}")(harness)(_.io)
+      test(mc.gen()).withAnnotations(mc.annotations)(drive(_))
     }
 }
 

@@ -74,6 +74,13 @@ class TagArray(val sets: Int, val pol: ReplacementPolicy, lrp: Boolean, levelBit
     if (ruw == SyncReadMem.Undefined) {
       when(wEn && !clearingNow) { assert(rSet === wSet, "TagArray: a decision writes another set than the one read") }
       mem.readWrite(Mux(clearingNow, wSet, rSet), wData, true.B, wEn)
+    } else if (sets == 1 && ruw == SyncReadMem.WriteFirst) {
+      // one write-first set (a hybrid side array of one set: NODE_CACHE=32 or less) is a register: what a read
+      // started in a cycle returns on the next is the set as written in that cycle, else as it was. firtool 1.62.1
+      // stops on a write-first SyncReadMem of depth 1 ("operand #0 does not dominate this use").
+      val set = Reg(entryType)
+      when(wEn) { set := wData }
+      set
     } else { when(wEn) { mem.write(wSet, wData) }; mem.read(rSet, true.B) }
 
   /** Starts a read of `line`'s set; the result is the entry one cycle later (undefined after a cycle that wrote). */
