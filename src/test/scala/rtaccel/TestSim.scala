@@ -8,12 +8,9 @@ import firrtl2.annotations.Annotation
   */
 object TestSim {
   val quick: Seq[Annotation] = VerilatorBackendAnnotation +: rtaccel.sim.VerilatorBuild.quick.annotations
-  /** `quick` with one build per folder (build/sim-test/<folder>) that every test of the same circuit reuses:
-    * chiseltest's cache compares the lowered circuit, so another circuit in the folder is rebuilt, never reused.
-    */
   /** `gen` compiled by firtool and driven through its `io` (sim.FirtoolHarness: a third to a half less build time than
-    * chiseltest's firrtl2 path); its SystemVerilog in build/sim-test/<folder>/sv, the simulator in <folder>/rtl, where the next test of the same circuit
-    * finds it. `module` is the elaborated module.
+    * chiseltest's firrtl2 path); its SystemVerilog in build/sim-test/<folder>/sv, the simulator in <folder>/rtl,
+    * where the next test of the same circuit finds it. `module` is the elaborated module.
     */
   final case class Firtool[M, I <: chisel3.Data](module: M, gen: () => rtaccel.sim.FirtoolShell[I], annotations: Seq[Annotation])
   def firtool[M <: chisel3.Module, I <: chisel3.Data](folder: String, build: rtaccel.sim.VerilatorBuild = rtaccel.sim.VerilatorBuild.quick)(gen: => M)(io: M => I): Firtool[M, I] = {
@@ -22,6 +19,9 @@ object TestSim {
     Firtool(s.module, s.gen, Seq(VerilatorBackendAnnotation, chiseltest.internal.CachingAnnotation,
       firrtl2.options.TargetDirAnnotation(s"build/sim-test/$folder/rtl")) ++ build.withSources(s.sources))
   }
+  /** `quick` with one build per folder (build/sim-test/<folder>) that every test of the same circuit reuses:
+    * chiseltest's cache compares the lowered circuit, so another circuit in the folder is rebuilt, never reused.
+    */
   def cached(folder: String): Seq[Annotation] =
     quick ++ Seq(chiseltest.internal.CachingAnnotation, firrtl2.options.TargetDirAnnotation(s"build/sim-test/$folder"))
 }

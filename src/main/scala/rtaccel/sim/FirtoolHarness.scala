@@ -12,8 +12,8 @@ import chisel3._
   * are the one Chisel circuit.
   */
 object FirtoolHarness {
-  /** The elaborated module (its Scala values, e.g. a latency, stay readable), the shell to elaborate and the files that Verilator is given among its flags (VerilatorBuild.withSources), its
-    * `define` included. Not black-box resources: chiseltest lists those in a `-f` file, and Verilator 5.006 then runs
+  /** The elaborated module (its Scala values, e.g. a latency, stay readable), the shell to elaborate and the files
+    * that Verilator is given among its flags (VerilatorBuild.withSources), its `define` included. Not black-box resources: chiseltest lists those in a `-f` file, and Verilator 5.006 then runs
     * its `--build` make at `-j 1` whatever `-j` says (a platform's C++ compiled on one core).
     */
   final case class Shell[M, I <: Data](module: M, gen: () => FirtoolShell[I], sources: Seq[String])
