@@ -389,14 +389,19 @@ $(FIXTURES): $(wildcard scenes/*.py golden/*.py) | venv
 
 # The Python tests start a JVM for each model run of a few hundred rays: the C1 compiler alone and the serial
 # collector cut their CPU time by 30 % (231 -> 161 s user for golden/ and dse/, 199 -> 174 s wall). They run on
-# every core (pytest-xdist): each is one process at a time, and they share no output folder.
+# every core (pytest-xdist, each worker taking the next test when it is free: a few take 20-30 s), and they run
+# beside sbt, which leaves a core idle while scalac compiles the test sources and while its last suites finish;
+# their log is printed when both are done. They share no output folder with each other or with the Scala tests.
 TEST_JVM = -XX:TieredStopAtLevel=1 -XX:+UseSerialGC
+PYTEST_LOG = build/test-reports/python/pytest.log
 test: deps yosys fixtures
 	@rm -rf build/test-reports; mkdir -p build/test-reports/python
-	@rc=0; \
+	@rc=0; echo "[test] pytest runs beside sbt (its log, printed at the end: $(PYTEST_LOG))"; \
+	( RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
+	  JAVA_TOOL_OPTIONS="$(TEST_JVM)" $(PY) -m pytest -q -n auto --dist worksteal --junitxml=build/test-reports/python/pytest.xml \
+	  > $(PYTEST_LOG) 2>&1 ) & py=$$!; trap 'kill $$py 2>/dev/null' INT TERM; \
 	$(TEST_PATH) RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=3; \
-	RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
-	  JAVA_TOOL_OPTIONS="$(TEST_JVM)" $(PY) -m pytest -q -n auto --junitxml=build/test-reports/python/pytest.xml || rc=3; \
+	wait $$py || rc=3; cat $(PYTEST_LOG); \
 	$(PY) tools/count_tests.py build/test-reports; exit $$rc
 
 clean:

@@ -12,10 +12,16 @@ import rtaccel.io.InputError
 object TimingCmd {
   def main(args: Array[String]): Unit = Cli.run(args, Flags.timing)(main0)
 
-  def main0(a: Args): Unit = {
+  /** The board routed on when BOARD= is not given. */
+  val DefaultBoard = "ecp5-85"
+
+  def main0(given: Args): Unit = {
     val t0 = System.nanoTime()
+    // the default board stands for BOARD= everywhere, the circuit's PIPELINE budget included: without it the preset
+    // would be pipelined for its own board's family and clock, and routed on another
+    val a = if (given.opt("board").isDefined) given else Args(given.kv + ("board" -> DefaultBoard))
     val catalog = a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath)
-    val board = Boards.byName(a.get("board", "ecp5-85"), catalog)
+    val board = Boards.byName(a.need("board"), catalog)
     val part = board.ecp5.getOrElse(throw new InputError(s"BOARD=${board.name} is a ${board.family} board; make timing routes " +
       s"ECP5 parts only (nextpnr-ecp5): give BOARD=${Boards.ecp5Names(catalog).mkString(" or BOARD=")}"))
     val seeds = a.int("seeds", 1)

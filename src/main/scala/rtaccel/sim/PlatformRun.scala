@@ -99,10 +99,11 @@ object PlatformRun {
     * are left out.
     */
   def paramsDigest(p: PlatformParams): String =
-    // the clock and family shape the circuit only through PIPELINE's budget and (with one) the family's DSP block
-    // and delay chains and its LUTs' inputs, which are hashed in their place
+    // the clock, the family and PIPELINE's mode shape the circuit only through the budget (auto at 150 MHz and the
+    // number it gives are one circuit) and, with one, the family's DSP block, delay chains and LUTs' inputs, which
+    // are hashed in their place
     java.security.MessageDigest.getInstance("SHA-256").digest((p.copy(name = "", clockMhz = 1, clockSource = "", family = "",
-      pipelineMhz = None).toString + s" budget ${p.stageBudget}" + p.stageBudget.fold("")(_ => s" dsp ${p.dspShape} ram ${p.delayRamCycles} lut ${p.pipes.lutInputs}")).getBytes("UTF-8"))
+      pipelineMhz = None, pipelining = rtaccel.config.Pipelining.Fixed).toString + s" budget ${p.stageBudget}" + p.stageBudget.fold("")(_ => s" dsp ${p.dspShape} ram ${p.delayRamCycles} lut ${p.pipes.lutInputs}")).getBytes("UTF-8"))
       .take(5).map(b => f"${b & 0xff}%02x").mkString
 
   /** Simulates `rays` on the platform of `b.params` over the tree `b.bvh` (scene and rays already normalised).

@@ -47,6 +47,8 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(code == 0, err)
     val j = last(out)
     assert(j("family").str == "ecp5" && j("board").str == "ecp5-85" && j("unit").str == "BurstSplitter" && j("config").str == "small")
+    // the default board is the board of the circuit too: pipelined for ecp5 at its clock, not for the preset's board
+    assert(j("pipeline")("family").str == "ecp5" && j("pipeline")("for_mhz").num == Boards.byName("ecp5-85").clockMhz, j("pipeline").toString)
     val (fmax, target) = (j("fmax_mhz").num, j("target_mhz").num)
     assert(fmax > 0 && target == Boards.byName("ecp5-85").clockMhz && j("met").bool == (fmax >= target), j.toString)
     assert(j("lut4").num > 0 && j("ff").num >= j("wrapper_ff").num && j("mult18").num == 0 && j("ebr").num == 0, j.toString)
@@ -90,16 +92,20 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
 
   test("a target the unit misses exits 3 with the JSON printed last") {
     assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
-    val (code, out, err) = timing("--unit", "BurstSplitter", "--clock-mhz", "2000")
+    // PIPELINE at the budget auto gives for ecp5-85's clock: the circuit the test above routed, its route cached
+    val budget = Timing.forFamily("ecp5").levelsFor(Boards.byName("ecp5-85").clockMhz)
+    val (code, out, err) = timing("--unit", "BurstSplitter", "--clock-mhz", "2000", "--pipeline", budget.toString)
     assert(code == 3, err)
     val j = last(out)
     assert(!j("met").bool && j("target_mhz").num == 2000 && j("clock_source").str == "given" && j("fmax_mhz").num < 2000)
+    assert(j("cached").bool, "the same circuit as the first route: its result is reused")
     assert(err.contains("< target 2000.0 MHz"), err)
   }
 
   test("a part too small is refused before routing with the resource and both numbers (exit 3), the JSON last") {
     assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
-    // ecp5-85's clock: the same PIPELINE budget, so the same circuit, whose synthesis the first test cached
+    // ecp5-85's clock: the same PIPELINE budget, so the same circuit (its Verilog kept in memory); another part, so
+    // another synthesis (a route's key holds the part)
     val cat = dir.resolve("tiny.json")
     Files.writeString(cat, """{"boards": {"tiny5": {"part": "a test part", "family": "ecp5", "device": "um5g-25k",
       "package": "CABGA381", "speed_grade": 8, "lut4": 50, "ff": 100000, "mult18": 10, "ebr": 10, "dram_gbps": 1, "clock_mhz": 100}}}""")
@@ -135,7 +141,8 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
 
   test("CLOCK_MHZ=fmax: refused with the make command when nothing is cached, the routed clock (ECP5) or the proxy (Xilinx) when it is") {
     assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
-    val p = Cli.preset(Args(Map("config" -> "small", "tus" -> "1")), "test")
+    // the circuit make timing routes for ecp5-85 (the tests above emitted it: its Verilog is kept in memory)
+    val p = Cli.preset(Args(Map("config" -> "small", "tus" -> "1", "board" -> "ecp5-85")), "test")
     val board = Boards.byName("ecp5-85")
     val root = dir.resolve("fmax-cache")
     val e = intercept[InputError](ClockSource.resolve(p, board, "CONFIG=small TUS=1", root, root))

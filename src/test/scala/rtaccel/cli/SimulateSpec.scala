@@ -29,6 +29,8 @@ class SimulateSpec extends AnyFunSuite {
     assert(rtaccel.sim.PlatformRun.paramsDigest(PlatformParams(tus = 4)) == d) // stable: the same parameters, the same build
     // 155 MHz leaves the Virtex-5 budget of 150 MHz (6 levels); 200 MHz makes it 4: another circuit
     assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(name = "mine", clockMhz = 155, clockSource = "routed")) == d)
+    // PIPELINE=auto and the budget it gives, written as a number: one circuit
+    assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Levels(p.stageBudget.get))) == d)
     assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed, clockMhz = 300)) ==
       rtaccel.sim.PlatformRun.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed)))
     val changed = Seq(p.copy(rayStore = true), p.copy(tagForward = true), p.copy(nodeCache = CacheParams(64, 1, CachePolicy.Dm), respByPath = true, respTagged = true, nodeBanks = 2), p.copy(tus = 8), p.copy(hw = p.hw.copy(cacheHitQueue = 8)),
