@@ -29,8 +29,10 @@ object EmitVerilog {
         files
     }
   }
-  private val recent = new java.util.LinkedHashMap[String, Seq[(String, Array[Byte])]](4, 0.75f, true) {
-    override def removeEldestEntry(e: java.util.Map.Entry[String, Seq[(String, Array[Byte])]]): Boolean = size > 2
+  // a few MB of text per circuit (the 32-TU paper2017 about 10): six keep the circuits of the two commands a test
+  // JVM or a server may run side by side
+  private val recent = new java.util.LinkedHashMap[String, Seq[(String, Array[Byte])]](8, 0.75f, true) {
+    override def removeEldestEntry(e: java.util.Map.Entry[String, Seq[(String, Array[Byte])]]): Boolean = size > 6
   }
   private def clearSv(out: java.nio.file.Path): Unit = {
     Files.createDirectories(out)

@@ -1,6 +1,7 @@
 package rtaccel.iu
 
 import chisel3._
+import chisel3.experimental.hierarchy.{instantiable, public}
 import chisel3.util._
 import rtaccel.config.{PlatformParams, TriTest}
 import rtaccel.mc.{FetchBeat, FetchReq}
@@ -18,10 +19,13 @@ import rtaccel.mc.{FetchBeat, FetchReq}
   * FIFOs and each collection reads its job by the beat's tag.
   * RAY_STORE=1: requests and jobs carry no ray; the ray store (LUTRAM, one entry per requester, written through
   * `rays` as the TC hands a TU its ray) is read by the job's TU index as each node or primitive is assembled.
+  * Instantiable: the board top elaborates one and instantiates it per cluster (IUS), so the pipes, most of the
+  * circuit's text, are elaborated and compiled by firtool once whatever the clusters.
   */
+@instantiable
 class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extends Module {
   private val maxOutstanding = p.hw.iuOutstanding
-  val io = IO(new Bundle {
+  @public val io = IO(new Bundle {
     val req = Flipped(Vec(requesters, Decoupled(new IuReq(p))))
     val box = Valid(new BoxResult(p.pipes))
     val tri = Valid(new TriResult(p.pipes))
@@ -207,6 +211,9 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     case TriTest.Watertight => val t = Module(new WatertightPipe(p.pipes)); (t.io.in, t.io.out, t.latency)
   }
   triIn := triJob
+  /** The pipes' latencies, which the board top reports in its register map. */
+  @public val boxLatency: Int = boxPipe.latency
+  @public val triPipeLatency: Int = triLatency
   io.box := boxPipe.io.out
   io.tri := triOut
 }

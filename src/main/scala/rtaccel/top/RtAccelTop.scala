@@ -92,8 +92,15 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   // IUS clusters: TU i belongs to cluster i / tusPerIu, which has its own IU, MC and caches; the MCs share the
   // one memory port (AxiReadMux). A cluster's TUs answer to their index within it.
   // instance names: iu / mc as before at IUS=1 (waveforms and scripts keep their paths), iu_<c> / mc_<c> otherwise
-  private def named[T <: BaseModule](m: T, n: String, c: Int): T = { m.suggestName(if (p.ius == 1) n else s"${n}_$c"); m }
-  val ius = Seq.tabulate(p.ius)(c => named(Module(new IntersectionUnit(p, axiP.dataBits, p.tusPerIu)), "iu", c))
+  private def clusterName(n: String, c: Int) = if (p.ius == 1) n else s"${n}_$c"
+  private def named[T <: BaseModule](m: T, n: String, c: Int): T = { m.suggestName(clusterName(n, c)); m }
+  // the clusters' IUs are one module: elaborated once, instantiated IUS times
+  private val iuDefinition = chisel3.experimental.hierarchy.Definition(new IntersectionUnit(p, axiP.dataBits, p.tusPerIu))
+  val ius = Seq.tabulate(p.ius) { c =>
+    val i = chisel3.experimental.hierarchy.Instance(iuDefinition)
+    i.suggestName(clusterName("iu", c))
+    i
+  }
   // caches reorder DRAM traffic between the paths: give each path a response buffer (see MemoryController);
   // with several clusters the buffers also keep one cluster's R beats from waiting on another's
   // NODE_BANKS > 0: the clusters' MCs have no node cache (their node path carries nothing), the banks have it
@@ -101,7 +108,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
   val mcs = Seq.tabulate(p.ius)(c => named(Module(new MemoryController(p, axiP, pathFactory = CachePath.factory(clusterNodeCache, p.primCache, p.mppl),
     respBufferBeats = if (p.mcResponseBuffers) 2 * McGeometry(p, axiP).maxBeats else 0)), "mc", c))
   // generator parameters only (MPPL is a property of the memory image, not of the circuit)
-  private val latencies = rtaccel.iu.PipeLatencies(ius.head.boxPipe.latency, ius.head.triLatency, tc.prepLatency)
+  private val latencies = rtaccel.iu.PipeLatencies(iuDefinition.boxLatency, iuDefinition.triPipeLatency, tc.prepLatency)
   val regs = Module(new RegFile(RtAccelTop.configWords(p, latencies), RtAccelTop.counterNames, axiP.addrBits, p.nodeCache.maxLevel, p.hw.levelCodeBits,
     p.stepLimit, p.hw.stepBits))
   regs.io.lite <> io.lite

@@ -43,10 +43,11 @@ class AreaSpec extends AnyFunSuite {
 
   test("a board that is too small is refused with the resource and both numbers (exit 3)") {
     assume(hasYosys, "yosys absent: make test installs it from apt")
-    // xc7k325t's clock: the same PIPELINE budget, so the same circuit, whose synthesis the test above cached
+    // xc7k325t's clock and memory: the same parameters, so the same circuit (its Verilog kept in memory), whose
+    // synthesis the test above cached
     val cat = dir.resolve("tiny.json")
     Files.writeString(cat, """{"boards": {"tiny": {"part": "a test part", "family": "xc7", "lut": 100, "ff": 100000,
-      "dsp": 10, "bram36": 100, "dram_gbps": 1, "clock_mhz": 200}}}""")
+      "dsp": 10, "bram36": 100, "dram_gbps": 12.8, "clock_mhz": 200}}}""")
     val (code, out, err) = area("--node-cache", "256", "--board", "tiny", "--catalog", cat.toString)
     assert(code == 3, err)
     val j = last(out)
