@@ -52,7 +52,9 @@ help:
 	@echo "make run | test | golden | trace | cachesim | check | analyze | bench | simulate | roofline | soak | verilog | lint | area | area-fp | timing | timing-fit | cost-model | max-tus | regress | paper-nocache | paper-caches | bench-caches | dse | precision | fidelity | paper | knobs   (see README.md)"
 
 # ---------------------------------------------------------------- installation
-deps: venv verilator clang $(CP_FILE)
+# The venv (pip, mostly downloads) and the Scala compile (scalac, one core) install side by side.
+deps: verilator clang
+	@$(MAKE) -s --no-print-directory -j2 venv $(CP_FILE)
 
 venv: .venv/.stamp
 .venv/.stamp: requirements.txt

@@ -169,19 +169,22 @@ class PlatformSpec extends AnyFunSuite {
 
   // Short stack with restart in the TUs: the RTL's fetches (counted and replayed through the caches) and hits
   // equal model.traceShort's, and its hits the full stack's.
-  // make test: the LRP node and LRU primitive caches under jitter and backpressure in the same circuit
-  // (make test at 4 TUs, make regress 8: the build is the test's time and grows with the TUs)
-  for ((tus, ring, node, prim, jitter, stall) <- Seq((if (full) 8 else 4, 1, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 37, 40)) ++
-      (if (full) Seq((1, 2, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 0, 0)) else Nil))
+  // make test: a ring of 1 in the NODE_BANKS case's circuit below (LRP node banks, jitter, backpressure and memory
+  // errors); make regress: 8 TUs with the LRP node and LRU primitive caches, and 1 TU with a ring of 2
+  private def checkShort(sh: rtaccel.sim.PlatformRun.Outcome, tus: Int, ring: Int): Unit = {
+    val j = sh.json
+    // the full stack's side from the model alone (RTL == model is what runOne checks)
+    val (fo, fullNodes) = modelRun(Presets.paper2017.copy(tus = tus)) // caches and clusters change no fetch of the model
+    def bits(h: rtaccel.scene.Hits, i: Int) = Seq(h.t(i), h.u(i), h.v(i)).map(java.lang.Float.floatToRawIntBits) :+ h.prim(i)
+    for (i <- 0 until rays.count) assert(bits(sh.hits, i) == bits(fo, i), s"ray $i: the short stack's hit differs from the full stack's")
+    info(f"ring $ring: ${j("model_restarts").num}%.0f restarts, ${j("node_requests").num}%.0f node fetches vs $fullNodes with the full stack")
+    assert(j("model_restarts").num > 0 && j("node_requests").num > fullNodes, "the test ring must restart")
+    assert(j("short_stack").num == ring && j("overflowed").num == 0)
+  }
+  if (full) for ((tus, ring, node, prim, jitter, stall) <- Seq((8, 1, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 2, CachePolicy.Lru), 37, 40),
+      (1, 2, CacheParams(64, 1, CachePolicy.Dm), CacheParams(32, 2, CachePolicy.Lru), 0, 0)))
     test(s"short stack of $ring with restart at $tus TU(s) with caches (node ${node.entries} ${node.policy}, prim ${prim.entries} ${prim.policy}, jitter $jitter, stall $stall): bit-exact, counts equal the model, hits equal the full stack's") {
-      val sh = runOne(tus, 4, 4, rays, scene, jitter, stall, node = node, prim = prim, short = ring); val j = sh.json
-      // the full stack's side from the model alone (RTL == model is what runOne checks)
-      val (fo, fullNodes) = modelRun(Presets.paper2017.copy(tus = tus)) // caches change no fetch of the model
-      def bits(h: rtaccel.scene.Hits, i: Int) = Seq(h.t(i), h.u(i), h.v(i)).map(java.lang.Float.floatToRawIntBits) :+ h.prim(i)
-      for (i <- 0 until rays.count) assert(bits(sh.hits, i) == bits(fo, i), s"ray $i: the short stack's hit differs from the full stack's")
-      info(f"ring $ring: ${j("model_restarts").num}%.0f restarts, ${j("node_requests").num}%.0f node fetches vs $fullNodes with the full stack")
-      assert(j("model_restarts").num > 0 && j("node_requests").num > fullNodes, "the test ring must restart")
-      assert(j("short_stack").num == ring && j("overflowed").num == 0)
+      checkShort(runOne(tus, 4, 4, rays, scene, jitter, stall, node = node, prim = prim, short = ring), tus, ring)
     }
 
   // BOX_FORMAT: the outward-rounded box test in the IU equals model.RayBoxOutward in the model's traversal;
@@ -373,22 +376,28 @@ class PlatformSpec extends AnyFunSuite {
   // clusters (hybrid), one bank for four clusters, two memory channels, each without the store.
   // The make test case's DRAM poisons beats (docs/platform.md, "Memory errors"): transient, so every read error is
   // re-read and the run stays bit-exact with the fault-free model, then sticky on the same circuit, where exactly the
-  // model's rays are flagged: re-reads and poison refetches under two clusters, banks and tagged answers.
+  // model's rays are flagged: re-reads and poison refetches under two clusters, banks and tagged answers. Its TUs
+  // keep a short stack of 1 with restart (make regress: the short stack's own cases above, these without).
   private val bankErrorRate = 0.003
   private val bankCases = Seq((2, 2, if (full) 1 else 2, if (full) 8 else 4, CacheParams(64, 2, CachePolicy.Lrp, maxLevel = 3), CacheParams(32, 1, CachePolicy.Dm), 41, 25, true, !full)) ++
     (if (!full) Nil else Seq((2, 4, 1, 8, CacheParams(128, 1, CachePolicy.Hybrid, maxLevel = 2), CacheParams(16, 2, CachePolicy.Lru), 23, 30, false, false),
       (4, 1, 1, 8, CacheParams(64, 1, CachePolicy.Dm), CacheParams(), 0, 0, true, false),
       (2, 2, 2, 4, CacheParams(64, 2, CachePolicy.Lru), CacheParams(32, 1, CachePolicy.Dm), 17, 20, false, false)))
-  for (((ius, banks, ch, tus, node, prim, jitter, stall, fwd, store), k) <- bankCases.zipWithIndex)
+  for (((ius, banks, ch, tus, node, prim, jitter, stall, fwd, store), k) <- bankCases.zipWithIndex) {
+    val short = if (k == 0 && !full) 1 else 0
     test(s"NODE_BANKS=$banks shared by IUS=$ius${if (ch > 1) s", MEM_CHANNELS=$ch" else ""}${if (fwd) ", TAG_FORWARD=1" else ""}${if (store) ", RAY_STORE=1" else ""} at $tus TUs (node ${node.entries} ${node.policy}, " +
-        s"prim ${prim.entries}, jitter $jitter, stall $stall${if (k == 0) ", memory errors" else ""}): bit-exact, bank counts equal the banked model") {
-        val (rate, seed) = if (k == 0) (bankErrorRate, rootSpared(bankErrorRate)) else (0.0, 1)
-      val j = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch, order = tagged, forward = fwd, banks = banks,
-        rayStore = store, errorRate = rate, seed = seed, errorMode = MemFaults.Transient).json
+        s"prim ${prim.entries}, jitter $jitter, stall $stall${if (k == 0) ", memory errors" else ""}${if (short > 0) s", a short stack of $short" else ""}): " +
+        s"bit-exact, bank counts equal the banked model${if (short > 0) ", hits equal the full stack's" else ""}") {
+      val (rate, seed) = if (k == 0) (bankErrorRate, rootSpared(bankErrorRate)) else (0.0, 1)
+      val o = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch, order = tagged, forward = fwd, banks = banks,
+        rayStore = store, errorRate = rate, seed = seed, errorMode = MemFaults.Transient, short = short)
+      val j = o.json
+      // transient errors are all re-read: the hits are the fault-free ones, which the full stack's must equal
+      if (short > 0) checkShort(o, tus, short)
       if (rate > 0) {
         assert(j("mem_retries").num > 0 && j("read_errors").num == 0, ujson.write(j))
         val s = runOne(tus, 4, 4, rays, scene, jitter, stall, node, prim, ius = ius, channels = ch, order = tagged, forward = fwd, banks = banks,
-          rayStore = store, errorRate = rate, seed = seed, errorMode = MemFaults.Sticky).json
+          rayStore = store, errorRate = rate, seed = seed, errorMode = MemFaults.Sticky, short = short).json
         info(f"sticky errors: ${s("read_errors").num}%.0f rays flagged as the model, ${s("mem_retries").num}%.0f re-reads, ${s("poison_refetches").num}%.0f refetches")
         assert(s("read_errors").num > 0 && s("mem_retries").num > 0, ujson.write(s))
       }
@@ -397,6 +406,7 @@ class PlatformSpec extends AnyFunSuite {
       // the clusters' MCs saw only leaves: every node reference went through a bank
       assert(j("cluster_accesses").arr.map(_.num).sum == j("counters")("leaf_requests").num, ujson.write(j))
     }
+  }
 
   /** A seed whose poison at `rate` spares the root node (a poisoned root fails every ray, which tests less). */
   private def rootSpared(rate: Double): Int = (1 to 1000).find(s => !MemFaults(MemFaults.threshold(rate), s, 32, 128, 0, 64).nodeBad(0)).get
