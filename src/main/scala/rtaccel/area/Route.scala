@@ -63,10 +63,54 @@ object Route {
   /** The proxy's view of a synthesized ECP5 netlist (flat: synth_ecp5 flattens), for the fit of the ecp5 rule
     * against the routed clock (make timing-fit): its deepest path in LUT levels and the clock the rule gives it.
     */
-  private def proxy(work: Path, res: ujson.Obj): Unit = {
-    val t = Timing.forFamily("ecp5")
-    val lv = (Levels.ofNetlist(work.resolve(netlist), t.dspLevels).levels.values.toSeq :+ 0).max
-    res("proxy_lut_levels") = lv; res("proxy_levels_version") = Levels.version; res("proxy_fmax_mhz") = t.fmaxMhz(lv)
+  private def proxy(levels: Int, res: ujson.Obj): Unit = {
+    res("proxy_lut_levels") = levels; res("proxy_levels_version") = Levels.version
+    res("proxy_fmax_mhz") = Timing.forFamily("ecp5").fmaxMhz(levels)
+  }
+
+  /** A unit's synth_ecp5, kept apart from its routes (`synth/<key>` under the cache): it depends on the circuit, the
+    * wrapper, the script and Yosys, not on the part, the speed grade or the seed, so TIMING_SEEDS=3 or another ECP5
+    * part routes the one netlist (synthesizing BoxPipe or TriPipe takes minutes). It holds the netlist gzipped,
+    * Yosys's statistics and log, and the proxy's levels (levels.json, written last: it marks a whole synthesis).
+    */
+  private final case class Synthesized(dir: Path, levels: Int, seconds: Double, cached: Boolean) {
+    def stat: Path = dir.resolve("stat.json")
+    def log: Path = dir.resolve(synthLog)
+    /** The netlist unpacked into `work`, where nextpnr reads it. */
+    def netlistInto(work: Path): Unit = {
+      val in = new java.util.zip.GZIPInputStream(Files.newInputStream(dir.resolve(netlistGz)))
+      try Files.copy(in, work.resolve(netlist), StandardCopyOption.REPLACE_EXISTING) finally in.close()
+    }
+  }
+  private val netlistGz = netlist + ".gz"
+  private val synthLevels = "levels.json"
+
+  private def synthesized(j: Job, wrap: String, cacheRoot: Path, what: String, say: String => Unit): Synthesized = {
+    val dspLevels = Timing.forFamily("ecp5").dspLevels
+    val dir = cacheRoot.resolve("synth").resolve(Synthesis.hash(j.files, Seq(yosysBanner, j.top, wrap, synthScript(Nil),
+      s"levels v${Levels.version} dsp $dspLevels").mkString("\n")))
+    val done = dir.resolve(synthLevels)
+    if (Files.isRegularFile(done)) {
+      say(s"cached synthesis $dir")
+      val l = ujson.read(Files.readString(done))
+      Synthesized(dir, l("lut_levels").num.toInt, l("synth_s").num, cached = true)
+    } else {
+      val work = dir.resolve("work")
+      val s0 = System.nanoTime()
+      synthesize(j, work, wrap, what, say)
+      val seconds = (System.nanoTime() - s0) / 1e9
+      val levels = (Levels.ofNetlist(work.resolve(netlist), dspLevels).levels.values.toSeq :+ 0).max
+      val out = new java.util.zip.GZIPOutputStream(Files.newOutputStream(work.resolve(netlistGz)))
+      try Files.copy(work.resolve(netlist), out) finally out.close()
+      Files.delete(work.resolve(netlist))
+      deleteTree(work.resolve("rtl")) // copies of the emitted files, which the key identifies
+      Files.writeString(work.resolve(synthLevels), ujson.write(ujson.Obj("lut_levels" -> levels, "synth_s" -> seconds)))
+      Files.list(work).toArray.map(_.asInstanceOf[Path]).filter(_.getFileName.toString != synthLevels).foreach(f =>
+        Files.move(f, dir.resolve(f.getFileName), StandardCopyOption.REPLACE_EXISTING))
+      Files.move(work.resolve(synthLevels), done, StandardCopyOption.REPLACE_EXISTING)
+      Files.delete(work)
+      Synthesized(dir, levels, seconds, cached = false)
+    }
   }
 
   /** Copies the circuit (the top's hierarchy) into `work` and synthesizes it there (netlist.json, stat.json, yosys.log). */
@@ -88,10 +132,7 @@ object Route {
     say(s"cached routing ${r.dir}")
     // a result routed before the proxy was recorded (or under older proxy rules): the same synthesis again, for it
     if (!r.result.obj.get("proxy_levels_version").flatMap(_.numOpt).contains(Levels.version.toDouble)) {
-      val work = r.dir.resolve("proxy-work")
-      synthesize(j, work, wrapper(j)._1, s"$what (the proxy's levels of the cached route)", say)
-      proxy(work, r.result)
-      deleteTree(work)
+      proxy(synthesized(j, wrapper(j)._1, cacheRoot, s"$what (the proxy's levels of the cached route)", say).levels, r.result)
       Files.writeString(r.dir.resolve(resultFile), ujson.write(r.result, indent = 2) + "\n")
     }
     r
@@ -102,11 +143,14 @@ object Route {
     val res = ujson.Obj("top" -> j.top, "part" -> j.board.part, "device" -> j.part.device, "package" -> j.part.pkg,
       "speed_grade" -> j.speed, "seed" -> j.seed, "nextpnr_target_mhz" -> j.board.clockMhz, "wrapper_ff" -> wrapFf,
       "yosys_version" -> yosysVersion, "nextpnr_version" -> nextpnrVersion)
-    val s0 = System.nanoTime()
-    synthesize(j, work, wrap, what, say)
-    res("synth_s") = (System.nanoTime() - s0) / 1e9
-    proxy(work, res)
-    val cells = Yosys.modules(work.resolve("stat.json")).getOrElse(TimingWrap.module, Map.empty)
+    val syn = synthesized(j, wrap, cacheRoot, what, say)
+    deleteTree(work) // an interrupted run's
+    Files.createDirectories(work)
+    res("synth_s") = syn.seconds; res("synth_cached") = syn.cached
+    proxy(syn.levels, res)
+    // the synthesis's log and statistics beside the route's (make timing copies yosys.log into OUT)
+    for (f <- Seq(syn.log, syn.stat)) Files.copy(f, work.resolve(f.getFileName), StandardCopyOption.REPLACE_EXISTING)
+    val cells = Yosys.modules(syn.stat).getOrElse(TimingWrap.module, Map.empty)
     def n(t: String) = cells.getOrElse(t, 0L)
     // LUT4 sites as nextpnr counts them: a CCU2C carry cell takes two, a 16x4 distributed RAM four
     val need = Seq("lut4" -> (n("LUT4") + 2 * n("CCU2C") + 4 * n("TRELLIS_DPR16X4")), "ff" -> n("TRELLIS_FF"),
@@ -121,6 +165,7 @@ object Route {
       case Some((r, u, h)) => say(s"does not fit ${j.board.part}: $r $u > $h; not routed")
       case None =>
         say(s"nextpnr $nextpnrVersion on ${j.board.part} (--${j.part.device}, speed -${j.speed}, seed ${j.seed})")
+        syn.netlistInto(work)
         val p0 = System.nanoTime()
         val plog = work.resolve(pnrLog)
         val code = Tools.run(Tools.yowasp("nextpnr-ecp5") ++ pnrArgs(j), work, say, () => Nextpnr.phase(plog), beatS = 15)
@@ -143,9 +188,8 @@ object Route {
             res("mult18") = r.used.getOrElse("MULT18X18D", 0L).toDouble; res("ebr") = r.used.getOrElse("DP16KD", 0L).toDouble
         }
     }
-    // the netlist is large and everything it was kept for is in the report; result.json last: it marks a whole run
+    // the netlist is large, kept (gzipped) with the synthesis; result.json last: it marks a whole run
     Files.deleteIfExists(work.resolve(netlist))
-    deleteTree(work.resolve("rtl")) // copies of the emitted files, which the key identifies
     Files.writeString(work.resolve(resultFile), ujson.write(res, indent = 2) + "\n")
     Files.list(work).toArray.map(_.asInstanceOf[Path]).filter(_.getFileName.toString != resultFile).foreach(f =>
       Files.move(f, dir.resolve(f.getFileName), StandardCopyOption.REPLACE_EXISTING))

@@ -68,7 +68,7 @@ object TimingCmd {
     j("seeds") = seeds; j("fmax_mhz_seeds") = ujson.Arr.from(runs.map(x => x.result("fmax_mhz")))
     j("fmax_reported") = if (seeds > 1) "median" else "the one seed"
     j("part") = board.part; j("device") = part.device; j("package") = part.pkg; j("speed_grade") = speed
-    for (k <- Seq("yosys_version", "nextpnr_version", "synth_s", "pnr_s")) j(k) = r.value.getOrElse(k, ujson.Null)
+    for (k <- Seq("yosys_version", "nextpnr_version", "synth_s", "synth_cached", "pnr_s")) j(k) = r.value.getOrElse(k, ujson.Null)
     j("cached") = runs.forall(_.cached); j("cache") = shown.dir.toString
     j("wall_s") = (System.nanoTime() - t0) / 1e9; j("rtaccel") = Cli.version
 

@@ -60,7 +60,7 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     // the proxy's levels of the same (flat) netlist, and the clock the ecp5 rule gives them
     val px = j("proxy")
     assert(px("lut_levels").num >= 1 && math.abs(px("fmax_mhz").num - Timing.forFamily("ecp5").fmaxMhz(px("lut_levels").num.toInt)) < 1e-6, px.toString)
-    assert(!j("cached").bool && err.contains("[timing] yosys") && err.contains("[timing] nextpnr"), err)
+    assert(!j("cached").bool && !j("synth_cached").bool && err.contains("[timing] yosys") && err.contains("[timing] nextpnr"), err)
     val o = dir.resolve(s"o${Seq("--unit", "BurstSplitter").hashCode}")
     assert(Files.isRegularFile(o.resolve("timing.json")) && Files.readString(o.resolve("nextpnr.log")).contains("Max frequency for clock"))
     val (c2, out2, err2) = timing("--unit", "BurstSplitter")
@@ -104,15 +104,16 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
 
   test("a part too small is refused before routing with the resource and both numbers (exit 3), the JSON last") {
     assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
-    // ecp5-85's clock: the same PIPELINE budget, so the same circuit (its Verilog kept in memory); another part, so
-    // another synthesis (a route's key holds the part)
+    // ecp5-85's clock and memory: the same circuit (its Verilog kept in memory) and the same
+    // synthesis, which the first test cached: a route's key holds the part, a synthesis's does not
     val cat = dir.resolve("tiny.json")
     Files.writeString(cat, """{"boards": {"tiny5": {"part": "a test part", "family": "ecp5", "device": "um5g-25k",
-      "package": "CABGA381", "speed_grade": 8, "lut4": 50, "ff": 100000, "mult18": 10, "ebr": 10, "dram_gbps": 1, "clock_mhz": 100}}}""")
+      "package": "CABGA381", "speed_grade": 8, "lut4": 50, "ff": 100000, "mult18": 10, "ebr": 10, "dram_gbps": 1.6, "clock_mhz": 100}}}""")
     val (code, out, err) = timing("--unit", "BurstSplitter", "--board", "tiny5", "--catalog", cat.toString)
     assert(code == 3, err)
     val j = last(out)
     assert(!j("fits").bool && !j("met").bool && j("fmax_mhz").isNull && j("critical_path").isNull, j.toString)
+    assert(j("synth_cached").bool && err.contains("cached synthesis") && !err.contains("[timing] yosys"), err)
     assert(j("first_overflow")("resource").str == "lut4" && j("first_overflow")("available").num == 50 && j("first_overflow")("used").num > 50)
     assert(err.contains("does not fit a test part: lut4") && !err.contains("[timing] nextpnr"), err)
   }
