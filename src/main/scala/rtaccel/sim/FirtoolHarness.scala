@@ -35,6 +35,27 @@ object FirtoolHarness {
     // randomization header would define, and that header is off
     Shell(m, () => new FirtoolShell(() => chiselTypeOf(port), m.name, digest), "+define+ENABLE_INITIAL_MEM_" +: files.map(_.toAbsolutePath.toString))
   }
+
+  /** `shell` once per `key` and `dir` in this JVM (the few most recent): a run that finds its simulator in chiseltest's
+    * build cache would otherwise elaborate the module and run firtool again only to name the shell (10-25 s for a
+    * platform; make test runs most of its platforms more than once). `key` must hold everything that shapes the
+    * circuit, as a build key does; the files must still be in `dir`, else they are made again.
+    */
+  def shellOnce[M <: Module, I <: Data](key: Any, gen: => M, dir: Path)(io: M => I): Shell[M, I] = {
+    val k = (key, dir.toAbsolutePath.normalize.toString)
+    val kept = recent.synchronized(Option(recent.get(k))).map(_.asInstanceOf[Shell[M, I]])
+      .filter(_.sources.tail.forall(f => Files.isRegularFile(java.nio.file.Paths.get(f))))
+    kept.getOrElse {
+      val s = shell(gen, dir)(io)
+      recent.synchronized(recent.put(k, s))
+      s
+    }
+  }
+  // an entry holds an elaborated module (tens of MB for a platform): the two suites a test JVM runs side by side
+  // each reuse their last two
+  private val recent = new java.util.LinkedHashMap[Any, Shell[_, _]](8, 0.75f, true) {
+    override def removeEldestEntry(e: java.util.Map.Entry[Any, Shell[_, _]]): Boolean = size > 4
+  }
 }
 
 /** firtool's module `name` as a black box: ports `clock`, `reset` and the module's `io`, flattened `io_*`. */

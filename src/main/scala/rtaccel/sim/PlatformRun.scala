@@ -177,7 +177,8 @@ object PlatformRun {
     var result: Outcome = null
     val t0 = System.nanoTime()
     val modelWall = (t0 - tModel) / 1e9 // the reference model, the memory image and the input files
-    val shell = FirtoolHarness.shell(new SimHarness(p.copy(maxSteps = None), setup), work.resolve("harness"))(_.io)
+    val harnessParams = p.copy(maxSteps = None)
+    val shell = FirtoolHarness.shellOnce((harnessParams, setup), new SimHarness(harnessParams, setup), work.resolve("harness"))(_.io)
     RawTester.test(shell.gen(), Seq(VerilatorBackendAnnotation, TargetDirAnnotation(work.resolve("rtl").toString),
       CachingAnnotation) ++ build.withSources(shell.sources) ++ o.waves.map(_ => WriteVcdAnnotation)) { dut =>
       dut.clock.setTimeout(0)
