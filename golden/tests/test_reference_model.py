@@ -3,6 +3,7 @@
 Needs the compiled model (RTACCEL_CLASSPATH, set by `make test`) and the procedural fixtures
 (RTACCEL_FIXTURES); real scenes from ../shared/scenes are used when present and skipped otherwise.
 """
+import atexit
 import json
 import os
 import subprocess
@@ -27,13 +28,32 @@ needs_model = pytest.mark.skipif(not (CP_FILE and Path(CP_FILE).is_file()),
                                  reason="compiled model absent: run through `make test` (sets RTACCEL_CLASSPATH)")
 
 
+_server = None
+
+
+def _trace_server():
+    """One JVM per test process that answers every model trace: rtaccel.cli.Serve, the explorer's server, runs make
+    trace's command (rtaccel.cli.Trace: the same flags, checks, files and JSON line) for each request. A JVM started
+    per trace cost about a second of CPU, some ninety times in a run; the entry point's own exit statuses are tested
+    where they are the subject (test_extremes_per_option's refusals, tools/tests/test_entry_point.py)."""
+    global _server
+    if _server is None or _server.poll() is not None:
+        cp = Path(CP_FILE).read_text().strip()
+        # progress lines go to stderr, which nothing reads here: dropped, so the pipe never fills
+        _server = subprocess.Popen(["java", "-Xss64m", "-Xmx4g", "-cp", cp, "rtaccel.cli.Serve"], stdin=subprocess.PIPE,
+                                   stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, bufsize=1)
+        atexit.register(_server.stdin.close)  # the server ends at the end of its input
+    return _server
+
+
 def model_trace(tris_path, rays_path, out, m=4, mppl=4, config="fit", extra=()):
-    cp = Path(CP_FILE).read_text().strip()
-    cmd = ["java", "-Xss64m", "-Xmx4g", "-cp", cp, "rtaccel.cli.Trace", "--tris", str(tris_path),
-           "--rays", str(rays_path), "--out", str(out), "--m", str(m), "--mppl", str(mppl), "--config", config, *extra]
-    res = subprocess.run(cmd, capture_output=True, text=True)
-    assert res.returncode == 0, res.stderr
-    return load_hits(str(Path(out) / "hits.npy")), json.loads(res.stdout.strip().splitlines()[-1])
+    args = ["--tris", str(tris_path), "--rays", str(rays_path), "--out", str(out), "--m", str(m), "--mppl", str(mppl),
+            "--config", config, *extra]
+    srv = _trace_server()
+    srv.stdin.write(json.dumps({"cmd": "trace", "args": args}) + "\n")
+    answer = json.loads(srv.stdout.readline())
+    assert answer["status"] == 0, answer["error"]
+    return load_hits(str(Path(out) / "hits.npy")), answer["result"]
 
 
 def run_check(tris, rays, golden, model):
