@@ -399,9 +399,9 @@ PYTEST_LOG = build/test-reports/python/pytest.log
 test: deps yosys fixtures
 	@rm -rf build/test-reports; mkdir -p build/test-reports/python
 	@rc=0; echo "[test] pytest runs beside sbt (its log, printed at the end: $(PYTEST_LOG))"; \
-	( RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
+	RTACCEL_FIXTURES=$(ROOT)/build/fixtures RTACCEL_CLASSPATH=$(ROOT)/$(CP_FILE) RTACCEL_SHARED_SCENES=$(SHARED_SCENES) \
 	  JAVA_TOOL_OPTIONS="$(TEST_JVM)" $(PY) -m pytest -q -n auto --dist worksteal --junitxml=build/test-reports/python/pytest.xml \
-	  > $(PYTEST_LOG) 2>&1 ) & py=$$!; trap 'kill $$py 2>/dev/null' INT TERM; \
+	  > $(PYTEST_LOG) 2>&1 & py=$$!; trap 'kill $$py 2>/dev/null; exit 130' INT TERM; \
 	$(TEST_PATH) RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=3; \
 	wait $$py || rc=3; cat $(PYTEST_LOG); \
 	$(PY) tools/count_tests.py build/test-reports; exit $$rc
