@@ -331,6 +331,8 @@ final case class PlatformParams(
   lazy val pipes: rtaccel.iu.PipeParams = rtaccel.iu.PipeParams(m, tuBits, boxFormat, boxSlackUlps, triTest, triFormat, divStages,
     stageBudget, stageBudget.map(_ => dspShape), stageBudget.flatMap(_ => delayRamCycles),
     stageBudget.fold(rtaccel.fp.Depth.LutInputs)(_ => rtaccel.area.Timing.forFamily(family).lutInputs))
+  /** The view a node's way into the box pipe takes (iu.NodeJob, iu.NodeDecode). */
+  lazy val nodes: rtaccel.iu.NodeParams = rtaccel.iu.NodeParams(pipes, nodeQuantBits, nodeSlotBytes)
   /** With a budget, on a family without shift-register LUTs (boards/timing.json `delay_ram_cycles`): delays of at
     * least this many cycles in LUT RAM (fp.Stager.chain). */
   lazy val delayRamCycles: Option[Int] = rtaccel.area.Timing.forFamily(family).delayRamCycles

@@ -155,13 +155,13 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     // reads it; in request order the MC's mux does, and the IU's register slice on the responses carries it here)
     when(beatFire) { assert(beats.bits.last === jobDone, "IntersectionUnit: a response's last beat disagrees with its job's size") }
 
-    val node = Wire(new NodeJob(p))
+    val node = Wire(new NodeJob(p.nodes))
     node.tu := job.tu
     node.ray := rayOf(job)
     node.tmax := job.tmax
     node.words := VecInit(words.take(nodeWords))
     node.err := unitErr
-    val box = NodeDecode.toBoxJob(p, unitDone && !isLeaf, node)
+    val box = NodeDecode.toBoxJob(p.nodes, unitDone && !isLeaf, node)
     val tri = Wire(Valid(new TriJob(p.pipes)))
     tri.valid := unitDone && isLeaf
     tri.bits.tu := job.tu

@@ -3,15 +3,20 @@ package rtaccel.iu
 import chisel3._
 import chisel3.util._
 import rtaccel.bvh.QNodeLayout
-import rtaccel.config.PlatformParams
 import rtaccel.fp.{Fp, FpFormat}
 
-/** A node as the IU collects it from memory: the words of one nodeSlotBytes slot. */
-class NodeJob(p: PlatformParams) extends Bundle {
-  val tu = UInt(p.tuBits.W)
+/** What shapes a node's way into the box pipe (NodeJob, NodeDecode): the pipes' view, NODE_FORMAT's bits (0: the
+  * full layout, no decoder) and the stored node's slot (`PlatformParams.nodes`). */
+final case class NodeParams(pipes: PipeParams, quantBits: Int, slotBytes: Int) {
+  def m: Int = pipes.m
+}
+
+/** A node as the IU collects it from memory: the words of one slotBytes slot. */
+class NodeJob(p: NodeParams) extends Bundle {
+  val tu = UInt(p.pipes.tuBits.W)
   val ray = new RayData
   val tmax = UInt(32.W)
-  val words = Vec(p.nodeSlotBytes / 4, UInt(32.W))
+  val words = Vec(p.slotBytes / 4, UInt(32.W))
   val err = Bool()
 }
 
@@ -20,14 +25,14 @@ class NodeJob(p: PlatformParams) extends Bundle {
   *   1: per child and plane q * 2^e of its axis (exact: Fp.fromUIntScaled)   2: origin + that, fp32 nearest even.
   * Empty slots decode like the others (ref 0 keeps them from hitting in BoxPipe).
   */
-class NodeDecode(p: PlatformParams) extends Module {
-  require(p.nodeQuantBits > 0, "NodeDecode is the quantized node format's stage")
+class NodeDecode(p: NodeParams) extends Module {
+  require(p.quantBits > 0, "NodeDecode is the quantized node format's stage")
   val io = IO(new Bundle {
     val in = Flipped(Valid(new NodeJob(p)))
     val out = Valid(new BoxJob(p.pipes))
   })
   private val f = FpFormat.fp32
-  private val lay = new QNodeLayout(p.m, p.nodeQuantBits)
+  private val lay = new QNodeLayout(p.m, p.quantBits)
   private val in = io.in.bits
   private val stream = Cat(in.words.slice(lay.streamWord0, lay.usedWords).reverse)
   private def field(bit: Int, width: Int): UInt = stream(bit + width - 1, bit)
@@ -52,9 +57,9 @@ class NodeDecode(p: PlatformParams) extends Module {
 
 object NodeDecode {
   /** The box job of a node collected as `job`: its words as they are for full nodes, through NodeDecode for q<k>. */
-  def toBoxJob(p: PlatformParams, valid: Bool, job: NodeJob): Valid[BoxJob] = {
+  def toBoxJob(p: NodeParams, valid: Bool, job: NodeJob): Valid[BoxJob] = {
     val out = Wire(Valid(new BoxJob(p.pipes)))
-    if (p.nodeQuantBits == 0) {
+    if (p.quantBits == 0) {
       out.valid := valid
       out.bits.tu := job.tu; out.bits.ray := job.ray; out.bits.tmax := job.tmax; out.bits.err := job.err
       out.bits.words := VecInit(job.words.take(7 * p.m))

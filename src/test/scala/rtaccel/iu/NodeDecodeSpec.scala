@@ -59,7 +59,7 @@ class NodeDecodeSpec extends AnyFunSuite with ChiselScalatestTester {
       val p = PlatformParams(tus = 2, m = m, nodeQuantBits = k)
       val rnd = new Random(7 + k)
       val nodes = directed(p, rnd) ++ Seq.fill(nRandom)(random(p, rnd))
-      test(new NodeDecode(p)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+      test(new NodeDecode(p.nodes)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
         dut.clock.setTimeout(0)
         val lat = 2
         var checked = 0
