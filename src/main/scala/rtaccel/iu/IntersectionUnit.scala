@@ -171,7 +171,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
     tri.bits.last := jobDone
     tri.bits.err := unitErr
     if (p.primPacked && !only.contains(false)) {
-      val asm = Module(new LeafAssembler(p, beatBits))
+      val asm = Module(new LeafAssembler(p.leaves, beatBits))
       asm.io.in.valid := beats.valid && jobs.valid && isLeaf
       asm.io.in.bits.beat := beats.bits
       asm.io.in.bits.lastPrim := job.lastPrim

@@ -2,20 +2,27 @@ package rtaccel.iu
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.{Numerics, PlatformParams, TriTest}
+import rtaccel.config.{Numerics, TriTest}
 import rtaccel.mc.FetchBeat
 
+/** What shapes the packed leaves' assembly (LeafAssembler and its beats): the pipes' view and the width of a leaf's
+  * primitive count (`PlatformParams.leaves`). */
+final case class LeafParams(pipes: PipeParams, countBits: Int) {
+  def tuBits: Int = pipes.tuBits
+  def maxLeafPrims: Int = 1 << countBits
+}
+
 /** The job a leaf's primitives are tested for: which TU asked, its ray and its current tmax. */
-class LeafCtx(p: PlatformParams) extends Bundle {
+class LeafCtx(p: LeafParams) extends Bundle {
   val tu = UInt(p.tuBits.W)
   val ray = new RayData
   val tmax = UInt(32.W)
 }
 
 /** One memory beat of a leaf, with the leaf's primitive count - 1 and its job (both constant over the leaf's beats). */
-class LeafBeat(p: PlatformParams, beatBits: Int) extends Bundle {
+class LeafBeat(p: LeafParams, beatBits: Int) extends Bundle {
   val beat = new FetchBeat(beatBits)
-  val lastPrim = UInt(math.max(1, p.refs.countBits).W)
+  val lastPrim = UInt(math.max(1, p.countBits).W)
   val ctx = new LeafCtx(p)
 }
 
@@ -31,7 +38,7 @@ class LeafBeat(p: PlatformParams, beatBits: Int) extends Bundle {
   * taken while earlier leaves still drain. `in` is refused only while the buffer lacks room for a whole beat;
   * the output never waits (the triangle pipes never stall).
   */
-class LeafAssembler(p: PlatformParams, beatBits: Int) extends Module {
+class LeafAssembler(p: LeafParams, beatBits: Int) extends Module {
   val io = IO(new Bundle {
     val in = Flipped(Decoupled(new LeafBeat(p, beatBits)))
     val out = Valid(new TriJob(p.pipes))
@@ -50,7 +57,7 @@ class LeafAssembler(p: PlatformParams, beatBits: Int) extends Module {
   val ends = Reg(Vec(cap, Bool()))
   val n = RegInit(0.U(nBits.W))
   // the queued job keeps what the triangle test reads: Möller–Trumbore takes no reciprocal direction
-  private val keepInv = p.triTest == TriTest.Watertight
+  private val keepInv = p.pipes.triTest == TriTest.Watertight
   class Stored extends Bundle {
     val tu = UInt(p.tuBits.W); val tmax = UInt(32.W); val o = Vec(3, UInt(32.W)); val d = Vec(3, UInt(32.W))
     val tmin = UInt(32.W); val inv = if (keepInv) Some(Vec(3, UInt(32.W))) else None
@@ -59,9 +66,9 @@ class LeafAssembler(p: PlatformParams, beatBits: Int) extends Module {
 
   // ---- input side: the beat index within the current leaf and how many of its words are record words
   val in = io.in.bits
-  val beatIdx = RegInit(0.U(log2Ceil(p.refs.maxLeafPrims * rec / bw + 2).W))
+  val beatIdx = RegInit(0.U(log2Ceil(p.maxLeafPrims * rec / bw + 2).W))
   // by count: the leaf's beats - 1 and the record words of its final beat (the rest of that beat is padding)
-  private val counts = 1 to (1 << p.refs.countBits)
+  private val counts = 1 to p.maxLeafPrims
   val lastBeat = VecInit(counts.map(c => ((rec * c + bw - 1) / bw - 1).U(beatIdx.getWidth.W)))(in.lastPrim)
   val finalWords = VecInit(counts.map(c => (rec * c - ((rec * c + bw - 1) / bw - 1) * bw).U(log2Ceil(bw + 1).W)))(in.lastPrim)
   val finalBeat = beatIdx === lastBeat

@@ -24,7 +24,7 @@ class LeafAssemblerBench(p: PlatformParams, beatBits: Int, stimHex: String, beat
     val firstBad = Output(UInt(32.W))
     val refused = Output(UInt(32.W))
   })
-  val dut = Module(new LeafAssembler(p, beatBits))
+  val dut = Module(new LeafAssembler(p.leaves, beatBits))
   val stim = Mem(beats, UInt((beatBits + 1 + 4 + 2 + 32).W)); loadMemoryFromFileInline(stim, stimHex)
   val exp = Mem(records, UInt((320 + 2 + 32).W)); loadMemoryFromFileInline(exp, expHex)
   val i = RegInit(0.U(32.W)); val waited = RegInit(0.U(2.W))
@@ -37,7 +37,7 @@ class LeafAssemblerBench(p: PlatformParams, beatBits: Int, stimHex: String, beat
   dut.io.in.bits.beat.err := s(beatBits)
   dut.io.in.bits.beat.last := false.B // the assembler counts a leaf's beats itself
   dut.io.in.bits.lastPrim := s(beatBits + 4, beatBits + 1)
-  dut.io.in.bits.ctx := 0.U.asTypeOf(new LeafCtx(p))
+  dut.io.in.bits.ctx := 0.U.asTypeOf(new LeafCtx(p.leaves))
   dut.io.in.bits.ctx.tu := tag(1, 0)
   dut.io.in.bits.ctx.tmax := tag
   dut.io.in.bits.ctx.ray.o(1) := (tag * 7.U)(31, 0)
