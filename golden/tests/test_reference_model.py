@@ -6,13 +6,16 @@ Needs the compiled model (RTACCEL_CLASSPATH, set by `make test`) and the procedu
 import atexit
 import json
 import os
+import shlex
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from dse.explore.worker import JvmServer
 from golden.check import classify
 from golden.io import load_hits, load_rays, save_npy
 from golden.trace import embree_trace
@@ -32,26 +35,24 @@ _server = None
 
 
 def _trace_server():
-    """One JVM per test process that answers every model trace: rtaccel.cli.Serve, the explorer's server, runs make
-    trace's command (rtaccel.cli.Trace: the same flags, checks, files and JSON line) for each request. A JVM started
-    per trace cost about a second of CPU, some ninety times in a run; the entry point's own exit statuses are tested
-    where they are the subject (test_extremes_per_option's refusals, tools/tests/test_entry_point.py)."""
+    """One JVM per test process that answers every model trace: rtaccel.cli.Serve through the explorer's client
+    (dse.explore.worker.JvmServer), running make trace's command (rtaccel.cli.Trace: the same flags, checks, files and
+    JSON line) for each request. A JVM started per trace cost about a second of CPU, some ninety times in a run; the
+    entry point's own exit statuses are tested where they are the subject (test_extremes_per_option's refusals,
+    tools/tests/test_entry_point.py)."""
     global _server
-    if _server is None or _server.poll() is not None:
+    if _server is None:
         cp = Path(CP_FILE).read_text().strip()
-        # progress lines go to stderr, which nothing reads here: dropped, so the pipe never fills
-        _server = subprocess.Popen(["java", "-Xss64m", "-Xmx4g", "-cp", cp, "rtaccel.cli.Serve"], stdin=subprocess.PIPE,
-                                   stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, bufsize=1)
-        atexit.register(_server.stdin.close)  # the server ends at the end of its input
+        log = tempfile.NamedTemporaryFile(prefix="trace-serve-", suffix=".log", delete=False).name
+        _server = JvmServer(f"java -Xss64m -Xmx4g -cp {shlex.quote(cp)}", log)
+        atexit.register(lambda: (_server.stop(), os.unlink(log)))  # a crash's message already carries the log's tail
     return _server
 
 
 def model_trace(tris_path, rays_path, out, m=4, mppl=4, config="fit", extra=()):
     args = ["--tris", str(tris_path), "--rays", str(rays_path), "--out", str(out), "--m", str(m), "--mppl", str(mppl),
             "--config", config, *extra]
-    srv = _trace_server()
-    srv.stdin.write(json.dumps({"cmd": "trace", "args": args}) + "\n")
-    answer = json.loads(srv.stdout.readline())
+    answer = _trace_server().request("trace", args)
     assert answer["status"] == 0, answer["error"]
     return load_hits(str(Path(out) / "hits.npy")), answer["result"]
 
