@@ -17,7 +17,7 @@ object EmitVerilog {
     */
   def emit(p: rtaccel.config.PlatformParams, out: java.nio.file.Path): Seq[java.nio.file.Path] = {
     val key = rtaccel.sim.PlatformRun.paramsDigest(p) // what shapes the circuit: not the preset's name, not a clock within the budget
-    val kept = recent.synchronized(Option(recent.get(key)))
+    val kept = recent.get(key)
     kept match {
       case Some(texts) =>
         clearSv(out)
@@ -25,15 +25,13 @@ object EmitVerilog {
       case None =>
         val files = emitModule(new RtAccelTop(p), out)
         val texts = files.map(f => f.getFileName.toString -> Files.readAllBytes(f))
-        recent.synchronized(recent.put(key, texts))
+        recent.put(key, texts)
         files
     }
   }
   // a few MB of text per circuit (the 32-TU paper2017 about 10): six keep the circuits of the two commands a test
   // JVM or a server may run side by side
-  private val recent = new java.util.LinkedHashMap[String, Seq[(String, Array[Byte])]](8, 0.75f, true) {
-    override def removeEldestEntry(e: java.util.Map.Entry[String, Seq[(String, Array[Byte])]]): Boolean = size > 6
-  }
+  private val recent = new rtaccel.io.Lru[String, Seq[(String, Array[Byte])]](6)
   private def clearSv(out: java.nio.file.Path): Unit = {
     Files.createDirectories(out)
     // a previous configuration's modules must not linger next to this one's

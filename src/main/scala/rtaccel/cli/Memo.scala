@@ -22,25 +22,25 @@ object Memo {
   val misses: scala.collection.mutable.Map[String, Long] = scala.collection.mutable.Map().withDefaultValue(0L)
 
   private val capacity = Map("scene" -> 4, "rays" -> 4, "bvh" -> 8, "trace" -> 2)
-  private val tables = scala.collection.mutable.Map[String, java.util.LinkedHashMap[Any, Any]]()
+  private val tables = scala.collection.mutable.Map[String, rtaccel.io.Lru[Any, Any]]()
 
-  private def table(name: String): java.util.LinkedHashMap[Any, Any] = tables.getOrElseUpdate(name,
-    new java.util.LinkedHashMap[Any, Any](16, 0.75f, true) { // access order: the eldest is the least recently used
-      override def removeEldestEntry(e: java.util.Map.Entry[Any, Any]): Boolean = size > capacity.getOrElse(name, 2)
-    })
+  private def table(name: String): rtaccel.io.Lru[Any, Any] =
+    tables.getOrElseUpdate(name, new rtaccel.io.Lru[Any, Any](capacity.getOrElse(name, 2)))
 
   /** `make` once per key while enabled; every call when disabled. */
   def apply[V](name: String, key: Any)(make: => V): V = synchronized {
     if (!enabled) make
     else {
       val t = table(name)
-      if (t.containsKey(key)) { hits(name) += 1; t.get(key).asInstanceOf[V] }
-      else { misses(name) += 1; val v = make; t.put(key, v); v }
+      t.get(key) match {
+        case Some(v) => hits(name) += 1; v.asInstanceOf[V]
+        case None => misses(name) += 1; val v = make; t.put(key, v); v
+      }
     }
   }
 
   /** Whether `name` would answer `key` from memory (for the "reused" flags of a result). */
-  def has(name: String, key: Any): Boolean = synchronized(enabled && tables.get(name).exists(_.containsKey(key)))
+  def has(name: String, key: Any): Boolean = synchronized(enabled && tables.get(name).exists(_.contains(key)))
 
   /** apply keyed by the file `p` (and `extra`); an absent file is left to `make`, which names the problem. */
   def file[V](name: String, p: Path, extra: Any = ())(make: => V): V =

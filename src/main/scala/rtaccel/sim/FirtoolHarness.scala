@@ -43,19 +43,17 @@ object FirtoolHarness {
     */
   def shellOnce[M <: Module, I <: Data](key: Any, gen: => M, dir: Path)(io: M => I): Shell[M, I] = {
     val k = (key, dir.toAbsolutePath.normalize.toString)
-    val kept = recent.synchronized(Option(recent.get(k))).map(_.asInstanceOf[Shell[M, I]])
+    val kept = recent.get(k).map(_.asInstanceOf[Shell[M, I]])
       .filter(_.sources.tail.forall(f => Files.isRegularFile(java.nio.file.Paths.get(f))))
     kept.getOrElse {
       val s = shell(gen, dir)(io)
-      recent.synchronized(recent.put(k, s))
+      recent.put(k, s)
       s
     }
   }
   // an entry holds an elaborated module (tens of MB for a platform): the two suites a test JVM runs side by side
   // each reuse their last two
-  private val recent = new java.util.LinkedHashMap[Any, Shell[_, _]](8, 0.75f, true) {
-    override def removeEldestEntry(e: java.util.Map.Entry[Any, Shell[_, _]]): Boolean = size > 4
-  }
+  private val recent = new rtaccel.io.Lru[Any, Shell[_, _]](4)
 }
 
 /** firtool's module `name` as a black box: ports `clock`, `reset` and the module's `io`, flattened `io_*`. */
