@@ -404,7 +404,7 @@ test: deps yosys fixtures
 	  > $(PYTEST_LOG) 2>&1 & py=$$!; trap 'kill $$py 2>/dev/null; exit 130' INT TERM; \
 	$(TEST_PATH) RTACCEL_FIXTURES=$(ROOT)/build/fixtures $(SBT) test || rc=3; \
 	wait $$py || rc=3; cat $(PYTEST_LOG); \
-	$(PY) tools/count_tests.py build/test-reports; exit $$rc
+	$(PY) tools/count_tests.py --failures build/test-reports; exit $$rc
 
 clean:
 	rm -rf build target project/target
