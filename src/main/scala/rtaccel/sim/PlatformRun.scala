@@ -95,14 +95,14 @@ object PlatformRun {
   }
 
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
-    * build of its own instead of a stale one. The preset's name and where the clock came from shape no circuit, so they
-    * are left out.
+    * build of its own instead of a stale one. The preset's name, where the clock came from and the knobs the registry
+    * says shape no circuit (config.Knobs.circuitView: the DRAM's figures) are left out.
     */
   def paramsDigest(p: PlatformParams): String =
     // the clock, the family and PIPELINE's mode shape the circuit only through the budget (auto at 150 MHz and the
     // number it gives are one circuit) and, with one, the family's DSP block, delay chains and LUTs' inputs, which
     // are hashed in their place
-    java.security.MessageDigest.getInstance("SHA-256").digest((p.copy(name = "", clockMhz = 1, clockSource = "", family = "",
+    java.security.MessageDigest.getInstance("SHA-256").digest((rtaccel.config.Knobs.circuitView(p).copy(name = "", clockMhz = 1, clockSource = "", family = "",
       pipelineMhz = None, pipelining = rtaccel.config.Pipelining.Fixed).toString + s" budget ${p.stageBudget}" + p.stageBudget.fold("")(_ => s" dsp ${p.dspShape} ram ${p.delayRamCycles} lut ${p.pipes.lutInputs}")).getBytes("UTF-8"))
       .take(5).map(b => f"${b & 0xff}%02x").mkString
 

@@ -37,33 +37,32 @@ object RtAccelTop {
 
   /** The read-only configuration registers of RegMap: what a host driver checks before it uploads anything. */
   def configWords(p: PlatformParams): Seq[(RegMap.Reg, BigInt)] = configWords(p, rtaccel.iu.PipeLatencies.of(p))
-  /** The configuration words with the pipes' latencies given (the board top passes its own instances'). */
+  /** The configuration words with the pipes' latencies given (the board top passes its own instances').
+    * A knob's fields are the registry's (config.Knobs: `reads`, each with the value it encodes); the fields no knob
+    * sets are derived here: the reference format, slot and beat sizes, and the pipes' latencies. */
   def configWords(p: PlatformParams, lat: rtaccel.iu.PipeLatencies): Seq[(RegMap.Reg, BigInt)] = {
     import RegMap._
-    def word(r: Reg, vs: (String, Long)*): BigInt = vs.map { case (n, v) =>
-      val f = r.fields.find(_.name == n).getOrElse(throw new IllegalArgumentException(s"${r.name} has no field $n"))
-      require(v >= 0 && v < (1L << f.width), s"${r.name}.$n = $v does not fit its ${f.width} bits")
-      BigInt(v) << f.lsb
-    }.sum
-    def cache(r: Reg, c: rtaccel.config.CacheParams) = word(r, "LOG2_ENTRIES" -> (if (c.entries > 0) log2Ceil(c.entries).toLong else 0L),
-      "PRESENT" -> (if (c.entries > 0) 1L else 0L), "WAYS" -> c.ways.toLong, "POLICY" -> policyCode(c.policy).toLong)
-    Seq(Config0 -> word(Config0, "M" -> p.m, "MAX_LEAF_PRIMS" -> math.min(255, p.refs.maxLeafPrims), "TUS" -> p.tus),
-      Config1 -> word(Config1, "STACK_DEPTH" -> p.stackDepth, "LEVEL_BITS" -> p.refs.levelBits, "COUNT_BITS" -> p.refs.countBits,
-        "NODE_ID_BITS" -> p.refs.nodeIdBits),
-      NodeCache -> (cache(NodeCache, p.nodeCache) + word(NodeCache, "SHARED" -> (if (p.nodeShared) 1L else 0L), "BANKS_LOG2" -> p.nodeBankBits.toLong)),
-      PrimCache -> cache(PrimCache, p.primCache),
-      Formats -> word(Formats, "NODE_BYTES_LOG2" -> log2Ceil(p.nodeSlotBytes), "PRIM_BYTES_LOG2" -> log2Ceil(p.primStrideBytes),
-        "AXI_DATA_BYTES_LOG2" -> log2Ceil(p.axiDataBits / 8), "TRI_FP" -> (if (p.triFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L), "BOX_FP" -> (if (p.boxFormat == rtaccel.fp.FpFormat.fp32) 0L else 1L),
-        "BOX_EXP_BITS" -> p.boxFormat.expBits.toLong, "BOX_MAN_BITS" -> p.boxFormat.manBits.toLong, "TRI_TEST" -> rtaccel.config.TriTest.all.indexOf(p.triTest).toLong,
-        "PRIM_PACKED" -> (if (p.primPacked) 1L else 0L)),
-      Formats2 -> word(Formats2, "NODE_QUANT_BITS" -> p.nodeQuantBits.toLong, "TRI_EXP_BITS" -> p.triFormat.expBits.toLong,
-        "TRI_MAN_BITS" -> p.triFormat.manBits.toLong, "IUS" -> p.ius.toLong, "RESP_ORDER" -> (if (p.respByPath) 1L else 0L), "RESP_TAGGED" -> (if (p.respTagged) 1L else 0L),
-        "RAY_STORE" -> (if (p.rayStore) 1L else 0L), "TAG_FORWARD" -> (if (p.tagForward) 1L else 0L),
-        "MEM_RETRIES" -> p.memRetries.toLong),
+    val derived: Seq[(String, Long)] = Seq("CONFIG0.MAX_LEAF_PRIMS" -> math.min(255, p.refs.maxLeafPrims),
+      "CONFIG1.LEVEL_BITS" -> p.refs.levelBits, "CONFIG1.COUNT_BITS" -> p.refs.countBits, "CONFIG1.NODE_ID_BITS" -> p.refs.nodeIdBits,
+      "FORMATS.PRIM_BYTES_LOG2" -> log2Ceil(p.primStrideBytes), "FORMATS.AXI_DATA_BYTES_LOG2" -> log2Ceil(p.axiDataBits / 8),
       // latencies past 255 cycles read 255
-      Pipeline -> word(Pipeline, "BUDGET" -> p.stageBudget.getOrElse(0).toLong, "BOX_LATENCY" -> math.min(255, lat.box).toLong,
-        "TRI_LATENCY" -> math.min(255, lat.tri).toLong, "PREP_LATENCY" -> math.min(255, lat.prep).toLong))
+      "PIPELINE.BOX_LATENCY" -> math.min(255, lat.box), "PIPELINE.TRI_LATENCY" -> math.min(255, lat.tri),
+      "PIPELINE.PREP_LATENCY" -> math.min(255, lat.prep))
+    val values = rtaccel.config.Knobs.all.flatMap(_.fields).map(f => f.name -> f.value(p)) ++ derived
+    configRegs.map { r =>
+      val mine = values.filter(_._1.startsWith(r.name + "."))
+      val names = mine.map(_._1.stripPrefix(r.name + "."))
+      // every field written, once: a field a knob adds to the map needs its encoding in the registry
+      require(names.sorted == r.fields.map(_.name).sorted, s"${r.name}: fields ${r.fields.map(_.name).mkString(", ")}, encoded ${names.mkString(", ")}")
+      r -> mine.map { case (n, v) =>
+        val f = r.fields.find(f => s"${r.name}.${f.name}" == n).get
+        require(v >= 0 && v < (1L << f.width), s"$n = $v does not fit its ${f.width} bits")
+        BigInt(v) << f.lsb
+      }.sum
+    }
   }
+  /** The read-only registers that describe the circuit, in the order the host reads them. */
+  val configRegs: Seq[RegMap.Reg] = Seq(RegMap.Config0, RegMap.Config1, RegMap.NodeCache, RegMap.PrimCache, RegMap.Formats, RegMap.Formats2, RegMap.Pipeline)
 }
 
 /** Board top (paper Fig 1, with the PCIe communication controller replaced by AXI4-Stream): rays in, hits

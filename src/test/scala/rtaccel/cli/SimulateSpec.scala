@@ -21,7 +21,7 @@ class SimulateSpec extends AnyFunSuite {
   // serves the suite; the default profile's choice is VerilatorBuildSpec's
   private val waves = Seq("--waves", "1", "--waves-from", "100", "--waves-to", "160", "--sim-build", "o0")
 
-  test("the build key's digest changes with every circuit-shaping parameter (PIPELINE's budget too), not with the preset's name or a clock that keeps the budget") {
+  test("the build key's digest changes with every circuit-shaping parameter (PIPELINE's budget too), not with the preset's name, a clock that keeps the budget or the DRAM's figures") {
     import rtaccel.config.{CacheParams, CachePolicy, PlatformParams}
     val p = PlatformParams(tus = 4)
     val d = rtaccel.sim.PlatformRun.paramsDigest(p)
@@ -29,6 +29,9 @@ class SimulateSpec extends AnyFunSuite {
     assert(rtaccel.sim.PlatformRun.paramsDigest(PlatformParams(tus = 4)) == d) // stable: the same parameters, the same build
     // 155 MHz leaves the Virtex-5 budget of 150 MHz (6 levels); 200 MHz makes it 4: another circuit
     assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(name = "mine", clockMhz = 155, clockSource = "routed")) == d)
+    // MEM_GBPS (and a board's DRAM efficiency and latency) shape no circuit: the registry sets them aside
+    assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(memory = rtaccel.config.MemoryParams(12.8e9, 0.8, 60))) == d)
+    assert(rtaccel.config.Knobs.all.filterNot(_.shapes).map(_.make) == Seq("MEM_GBPS"))
     // PIPELINE=auto and the budget it gives, written as a number: one circuit
     assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Levels(p.stageBudget.get))) == d)
     assert(rtaccel.sim.PlatformRun.paramsDigest(p.copy(pipelining = rtaccel.config.Pipelining.Fixed, clockMhz = 300)) ==
