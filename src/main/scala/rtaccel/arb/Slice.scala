@@ -55,7 +55,9 @@ object Slice {
     * routed as the smallest platform's critical path on ECP5 (the IU's job queue pointers through the valid to
     * the box pipe's input register, docs/timing.md).
     */
-  def late[T <: Data](p: PlatformParams, j: Valid[T]): Valid[T] = if (p.stageBudget.isEmpty) j else {
+  def late[T <: Data](p: PlatformParams, j: Valid[T]): Valid[T] = late(p.stageBudget, j)
+  /** The same for a unit that takes a view with the register budget (tu.TuParams). */
+  def late[T <: Data](stageBudget: Option[Int], j: Valid[T]): Valid[T] = if (stageBudget.isEmpty) j else {
     val r = Wire(Valid(chiselTypeOf(j.bits)))
     r.valid := RegNext(j.valid, false.B)
     r.bits := RegNext(j.bits)

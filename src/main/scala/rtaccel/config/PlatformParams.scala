@@ -333,6 +333,8 @@ final case class PlatformParams(
     stageBudget.fold(rtaccel.fp.Depth.LutInputs)(_ => rtaccel.area.Timing.forFamily(family).lutInputs))
   /** The view a node's way into the box pipe takes (iu.NodeJob, iu.NodeDecode). */
   lazy val nodes: rtaccel.iu.NodeParams = rtaccel.iu.NodeParams(pipes, nodeQuantBits, nodeSlotBytes)
+  /** The view a traversal unit takes (tu.TraversalUnit and its stacks). */
+  lazy val traversal: rtaccel.tu.TuParams = rtaccel.tu.TuParams(pipes, refs.refBits, stackDepth, shortStack, treeLevels, hw.stepBits, rayStore)
   /** The view the packed leaves' assembly takes (iu.LeafAssembler). */
   lazy val leaves: rtaccel.iu.LeafParams = rtaccel.iu.LeafParams(pipes, refs.countBits)
   /** With a budget, on a family without shift-register LUTs (boards/timing.json `delay_ram_cycles`): delays of at

@@ -26,7 +26,7 @@ import rtaccel.mc.{FetchBeat, FetchReq}
 class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extends Module {
   private val maxOutstanding = p.hw.iuOutstanding
   @public val io = IO(new Bundle {
-    val req = Flipped(Vec(requesters, Decoupled(new IuReq(p))))
+    val req = Flipped(Vec(requesters, Decoupled(new IuReq(p.tuBits, p.rayStore))))
     val box = Valid(new BoxResult(p.pipes))
     val tri = Valid(new TriResult(p.pipes))
     val mem = new Bundle {
@@ -46,7 +46,7 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   // a tree of small arbiters with queues between its levels (PIPELINE), one RRArbiter without a budget
   // (the winner's index tags requests with RESP_ORDER=tagged only); with PIPELINE the leaves' grants are registers
   // (a TU holds its request until taken), so a TU's request and its ready are not one path through the arbiter
-  val arb = Module(new rtaccel.arb.TreeArbiter(new IuReq(p), requesters, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, requesters),
+  val arb = Module(new rtaccel.arb.TreeArbiter(new IuReq(p.tuBits, p.rayStore), requesters, rtaccel.arb.TreeArbiter.fanIn(p.stageBudget, requesters),
     withChosen = p.respTagged, heldInputs = p.stageBudget.isDefined))
   arb.io.in <> io.req
   class Job extends Bundle {

@@ -15,11 +15,11 @@ class RayData extends Bundle {
 /** One TU request: intersect `ray` (within [tmin, tmax]) with the node or leaf that `ref` names.
   * RAY_STORE=1: no ray; the IU reads the ray of TU `tu` from its ray store.
   */
-class IuReq(p: PlatformParams) extends Bundle {
-  val tu = UInt(p.tuBits.W)
+class IuReq(tuBits: Int, rayStore: Boolean) extends Bundle {
+  val tu = UInt(tuBits.W)
   val cref = UInt(32.W)
   val tmax = UInt(32.W)
-  val ray = if (p.rayStore) None else Some(new RayData)
+  val ray = if (rayStore) None else Some(new RayData)
 }
 
 /** RAY_STORE=1: the ray the TC hands to the TU of index `slot` within an IU's cluster, written into that IU's ray

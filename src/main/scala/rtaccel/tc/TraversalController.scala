@@ -20,7 +20,7 @@ class TraversalController(p: PlatformParams) extends Module {
   val io = IO(new Bundle {
     val in = Flipped(Decoupled(new HostRay))
     val out = Decoupled(new TuResult)
-    val tuRay = Vec(p.tus, Decoupled(new TuRay(p)))
+    val tuRay = Vec(p.tus, Decoupled(new TuRay))
     val tuResult = Flipped(Vec(p.tus, Decoupled(new TuResult)))
   })
   private val f = FpFormat.fp32
@@ -37,7 +37,7 @@ class TraversalController(p: PlatformParams) extends Module {
   /** Cycles from a ray's acceptance to its prepared copy (1/dz leaves the divider last). */
   val prepLatency: Int = TraversalController.prepLatency(div.latency)
   private val slots = prepLatency / TraversalController.axes + 2 // rays the divider can hold, and one waiting
-  val prepared = Module(new Queue(new TuRay(p), slots))
+  val prepared = Module(new Queue(new TuRay, slots))
   val credits = RegInit(slots.U(log2Ceil(slots + 1).W))
   val inAxis = RegInit(0.U(2.W)) // the axis the divider takes next: 0 = ready for a ray
   val heldD = Reg(Vec(2, UInt(32.W))) // dy, dz of the ray being fed
@@ -77,7 +77,7 @@ class TraversalController(p: PlatformParams) extends Module {
   /** Cycles late the TC sees a TU become free (0 or 2). */
   val readyLag: Int = if (p.stageBudget.isDefined) 2 else 0
   private val offered = Wire(Vec(p.tus, Bool()))
-  private val rayOut = Wire(Decoupled(new TuRay(p)))
+  private val rayOut = Wire(Decoupled(new TuRay))
   // one-hot, none when no TU is free: a TU is offered a ray only while it is free
   val target: Seq[Bool] =
     if (readyLag == 0) {
@@ -95,7 +95,7 @@ class TraversalController(p: PlatformParams) extends Module {
       // on ECP5, into a two-entry slice's enables) nor any other logic sits between a register and the enables
       // of the ray's 385 bits, and the queue's read pointer steps on a register too.
       val anyNext = freeNext.reduce(_ || _)
-      val held = Reg(new TuRay(p))
+      val held = Reg(new TuRay)
       val heldValid = RegInit(false.B)
       val load = RegInit(true.B) // = !heldValid || (a TU takes `held` now), from registers of the cycle before
       prepared.io.deq.ready := load

@@ -87,7 +87,7 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     val tap = if (tapAccesses) Some(Output(Vec(p.memControllers, Valid(UInt(32.W))))) else None // per IU cluster, then per node bank
   })
   val tc = Module(new TraversalController(p))
-  val tus = Seq.fill(p.tus)(Module(new TraversalUnit(p)))
+  val tus = Seq.fill(p.tus)(Module(new TraversalUnit(p.traversal)))
   // IUS clusters: TU i belongs to cluster i / tusPerIu, which has its own IU, MC and caches; the MCs share the
   // one memory port (AxiReadMux). A cluster's TUs answer to their index within it.
   // instance names: iu / mc as before at IUS=1 (waveforms and scripts keep their paths), iu_<c> / mc_<c> otherwise

@@ -2,14 +2,13 @@ package rtaccel.tu
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.PlatformParams
 
 /** The state of the short stack with restart inside a TU (model.Traversal.traceShort, docs/architecture.md):
   * a ring of `p.shortStack` entries that overwrites its oldest entry when full (and remembers that it did),
   * and a trail of finished hit children per node level. Built in the TU's clock domain; the TU calls these
   * methods from its states, one push or pop per cycle, as it does with the full stack.
   */
-class ShortStack(p: PlatformParams) {
+class ShortStack(p: TuParams) {
   private val cap = p.shortStack
   require(cap >= 1)
   class Entry extends Bundle {
@@ -64,5 +63,5 @@ class ShortStack(p: PlatformParams) {
 
 object ShortStack {
   /** Levels run 0..treeLevels (a leaf sits one below the deepest node). */
-  def levelBits(p: PlatformParams): Int = log2Ceil(p.treeLevels + 1)
+  def levelBits(p: TuParams): Int = log2Ceil(p.treeLevels + 1)
 }

@@ -2,12 +2,24 @@ package rtaccel.tu
 
 import chisel3._
 import chisel3.util._
-import rtaccel.config.PlatformParams
 import rtaccel.fp.{Fp, FpFormat}
-import rtaccel.iu.{BoxResult, IuReq, RayData, TriResult}
+import rtaccel.iu.{BoxResult, IuReq, PipeParams, RayData, TriResult}
+
+/** What shapes a traversal unit (TraversalUnit and its stacks; `PlatformParams.traversal`): the pipes' view (M, the
+  * TU tag's width and the register budget, and the answers' bundles it receives), the width of a child reference's
+  * address, the stacks (depth, SHORT_STACK's ring and the levels its trail tracks), the step counter's width and
+  * whether a request carries the ray (RAY_STORE=0) or the IU's ray store has it. The TU's index is a port, so the TUs
+  * of a platform are one module.
+  */
+final case class TuParams(pipes: PipeParams, refBits: Int, stackDepth: Int, shortStack: Int, treeLevels: Int, stepBits: Int,
+                          rayStore: Boolean) {
+  def m: Int = pipes.m
+  def tuBits: Int = pipes.tuBits
+  def stageBudget: Option[Int] = pipes.stageBudget
+}
 
 /** A ray handed to a TU: its id, the prepared ray (with 1/d) and tmax. */
-class TuRay(p: PlatformParams) extends Bundle {
+class TuRay extends Bundle {
   val id = UInt(32.W)
   val ray = new RayData
   val tmax = UInt(32.W)
@@ -41,16 +53,16 @@ class TuResult extends Bundle {
   * `stepLimit` (prim -4): a loop through a corrupted image cannot hold the TU (model.Traversal counts alike). With
   * the short stack a node deeper than the trail's levels ends the ray the same way.
   */
-class TraversalUnit(p: PlatformParams) extends Module {
+class TraversalUnit(p: TuParams) extends Module {
   val io = IO(new Bundle {
-    val ray = Flipped(Decoupled(new TuRay(p)))
-    val req = Decoupled(new IuReq(p))
+    val ray = Flipped(Decoupled(new TuRay))
+    val req = Decoupled(new IuReq(p.tuBits, p.rayStore))
     val box = Flipped(Valid(new BoxResult(p.pipes)))
     val tri = Flipped(Valid(new TriResult(p.pipes)))
     val result = Decoupled(new TuResult)
     val busy = Output(Bool())
     val index = Input(UInt(p.tuBits.W)) // a port, not a parameter, so that every TU is one module
-    val maxSteps = Input(UInt(p.hw.stepBits.W)) // the MAX_STEPS register (0: no limit), read as a ray starts
+    val maxSteps = Input(UInt(p.stepBits.W)) // the MAX_STEPS register (0: no limit), read as a ray starts
   })
   private val index = io.index
   // with PIPELINE this TU's answers from the IU pass a register here: the compares of the TU's own tmax with an
@@ -59,7 +71,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   // PlatformParams.accessSliceCycles)
   private def mine[T <: Data](v: Valid[T], tu: T => UInt): Valid[T] = {
     val w = Wire(Valid(chiselTypeOf(v.bits))); w.valid := v.valid && tu(v.bits) === index; w.bits := v.bits
-    rtaccel.arb.Slice.late(p, w)
+    rtaccel.arb.Slice.late(p.stageBudget, w)
   }
   private val boxIn = mine[BoxResult](io.box, _.tu)
   private val triIn = mine[TriResult](io.tri, _.tu)
@@ -68,7 +80,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
 
   object S extends ChiselEnum { val idle, issue, waitBox, push, waitTri, pop, done = Value }
   val state = RegInit(S.idle)
-  val r = Reg(new TuRay(p))
+  val r = Reg(new TuRay)
   val cur = Reg(UInt(32.W))
   val tmax = Reg(UInt(32.W))
   val best = Reg(new TuResult)
@@ -78,7 +90,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   // fetches the ray may still make, counted down from MAX_STEPS as the ray starts (so the register across the chip
   // is read once per ray), whether it has a limit at all, and whether it has made them all: a register set as the
   // last allowed request leaves, so the request's valid waits on no compare
-  val stepsLeft = Reg(UInt(p.hw.stepBits.W))
+  val stepsLeft = Reg(UInt(p.stepBits.W))
   val limited = Reg(Bool())
   val outOfSteps = Reg(Bool())
   class Entry extends Bundle { val cref = UInt(TraversalUnit.refBits.W); val t = UInt(TraversalUnit.distBits.W) }
@@ -103,7 +115,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
 
   // with the short stack, a node below the trail's treeLevels levels ends the ray alike: no tree that fits the trail
   // (Fit.checkTrail) has one, only a loop through a corrupted image makes it, and the trail could not track it
-  private val tooDeep = ss.fold(false.B)(s => !cur(p.refs.refBits - 1) && s.level >= p.treeLevels.U)
+  private val tooDeep = ss.fold(false.B)(s => !cur(p.refBits - 1) && s.level >= p.treeLevels.U)
   io.req.valid := state === S.issue && !outOfSteps && !tooDeep
   when(state === S.issue && (outOfSteps || tooDeep)) { stepLimit := true.B; state := S.done } // the fetch is not made
   io.req.bits.tu := index
@@ -111,7 +123,7 @@ class TraversalUnit(p: PlatformParams) extends Module {
   io.req.bits.tmax := tmax
   io.req.bits.ray.foreach(_ := r.ray) // RAY_STORE=1: the IU's ray store has it, and r.ray is never read
   when(io.req.fire) {
-    state := Mux(cur(p.refs.refBits - 1), S.waitTri, S.waitBox)
+    state := Mux(cur(p.refBits - 1), S.waitTri, S.waitBox)
     stepsLeft := stepsLeft - 1.U; outOfSteps := limited && stepsLeft === 1.U
   }
 

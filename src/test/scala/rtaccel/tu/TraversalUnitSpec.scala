@@ -81,7 +81,7 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
     var cycle = 0L
     def garbage(): Int = rnd.nextInt()
     def fail(what: String): Nothing = throw new AssertionError(s"$what (seed $seed, cycle $cycle, ray ${recs.length})")
-    val tu = rtaccel.TestSim.firtool(folder(p))(new TraversalUnit(p))(_.io)
+    val tu = rtaccel.TestSim.firtool(folder(p))(new TraversalUnit(p.traversal))(_.io)
     test(tu.gen()).withAnnotations(tu.annotations) { dut =>
       dut.clock.setTimeout(0)
       dut.io.index.poke(index.U)
