@@ -18,7 +18,12 @@ final case class Routed(result: ujson.Obj, dir: Path, cached: Boolean) {
   * the CLOCK_MHZ of a run: a result belongs to the circuit, and the verdict against a target is the caller's.
   */
 object Route {
-  final case class Job(files: Seq[Path], top: String, board: Board, part: Ecp5Part, speed: Int, seed: Int)
+  final case class Job(files: Seq[Path], top: String, board: Board, part: Ecp5Part, speed: Int, seed: Int, router: String = DefaultRouter)
+
+  /** nextpnr-ecp5's routers (TIMING_ROUTER=): router1, its default and the one every route in docs/timing.md used, and
+    * router2, which routes congested designs in other ways (a different negotiation of overused wires). */
+  val Routers: Seq[String] = Seq("router1", "router2")
+  val DefaultRouter: String = Routers.head
 
   val resultFile = "result.json"
   val reportFile = "nextpnr-report.json"
@@ -40,7 +45,9 @@ object Route {
   /** nextpnr's arguments; every path is relative to the folder it runs in (YoWASP's sandbox mounts its own /tmp). */
   def pnrArgs(j: Job): Seq[String] = Seq(s"--${j.part.device}", "--package", j.part.pkg, "--speed", j.speed.toString,
     "--json", netlist, "--lpf-allow-unconstrained", "--timing-allow-fail", "--freq", f"${j.board.clockMhz}%.3f",
-    "--seed", j.seed.toString, "--threads", "1", "--report", reportFile, "-l", pnrLog, "-q")
+    "--seed", j.seed.toString, "--threads", "1", "--report", reportFile, "-l", pnrLog, "-q") ++
+    // named only when not nextpnr's default, so that the routes cached before the choice existed keep their keys
+    (if (j.router == DefaultRouter) Nil else Seq("--router", j.router))
 
   private def wrapper(j: Job): (String, Int) = {
     val f = j.files.find(_.getFileName.toString == s"${j.top}.sv").getOrElse(throw new InputError(s"no file ${j.top}.sv among the emitted Verilog"))

@@ -68,6 +68,18 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(c2 == 0 && j2("cached").bool && j2("fmax_mhz").num == fmax, err2)
   }
 
+  test("TIMING_ROUTER=router2: the same synthesis routed by nextpnr's other router, a route of its own in the cache") {
+    assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
+    val (code, out, err) = timing("--unit", "BurstSplitter", "--router", "router2")
+    assert(code == 0 || code == 3, err)
+    val j = last(out)
+    assert(j("router").str == "router2" && j("fmax_mhz").num > 0 && !j("cached").bool, j.toString)
+    assert(j("synth_cached").bool && Files.readString(Paths.get(j("cache").str).resolve("nextpnr.log")).contains("router2"), err)
+    val (_, out1, _) = timing("--unit", "BurstSplitter")
+    val j1 = last(out1)
+    assert(j1("router").str == "router1" && j1("cache").str != j("cache").str, j1.toString)
+  }
+
   test("nextpnr's utilisation lines: the first cell type over its capacity when placement ran out of room, else none") {
     val log = Files.createTempFile("nextpnr", ".log")
     val use = "Info: Device utilisation:\nInfo: \t              DP16KD:      36/    208    17%\n" +
@@ -125,7 +137,10 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(c2 == 2 && o2.isEmpty && e2.contains("UNIT=NoSuchUnit") && e2.contains("BurstSplitter") && e2.contains("RtAccelTop"), e2)
     val (c3, _, e3) = timing("--unit", "BurstSplitter", "--speed", "6")
     assert(c3 == 2 && e3.contains("SPEED=6") && e3.contains("speed grade 8 only"), e3)
-    for (x <- Seq(Seq("--unit", "BurstSplitter", "--board", "xc7k325t"), Seq("--unit", "NoSuchUnit"), Seq("--unit", "BurstSplitter", "--speed", "6")))
+    val (c4, o4, e4) = timing("--unit", "BurstSplitter", "--router", "router3")
+    assert(c4 == 2 && o4.isEmpty && e4.contains("TIMING_ROUTER=router3: give router1 or router2"), e4)
+    for (x <- Seq(Seq("--unit", "BurstSplitter", "--board", "xc7k325t"), Seq("--unit", "NoSuchUnit"), Seq("--unit", "BurstSplitter", "--speed", "6"),
+        Seq("--unit", "BurstSplitter", "--router", "router3")))
       assert(!Files.exists(dir.resolve(s"o${x.hashCode}")))
   }
 
