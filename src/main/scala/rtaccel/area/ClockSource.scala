@@ -13,8 +13,7 @@ object ClockSource {
   val sources: Seq[String] = Seq("given", "board", "proxy", "routed")
 
   /** (MHz, source) of the board top of `p` on `board`: the cached routed result of the same circuit (make timing,
-    * the board's speed grade, seed 1, nextpnr's default router; the fastest if it was routed for several targets) if
-    * there is one, else the cached make area proxy (fmax_mhz_proxy), else an
+    * the board's speed grade, seed 1) if there is one, else the cached make area proxy (fmax_mhz_proxy), else an
     * error naming the make command that makes one; `makeArgs` are the knobs that command needs ("CONFIG=small TUS=1").
     */
   def resolve(p: PlatformParams, board: Board, makeArgs: String, timingCache: Path = Paths.get("build/timing-cache"),
@@ -25,7 +24,7 @@ object ClockSource {
       // the key of a cached result is the emitted Verilog, so it is emitted (seconds; no synthesis)
       val files = rtaccel.cli.EmitVerilog.emit(p, tmp).filter(_.toString.endsWith(".sv"))
       val routed = board.ecp5.flatMap { part =>
-        try Route.lookupAny(Route.Job(files, "RtAccelTop", board, part, part.speedGrade, 1), timingCache).flatMap(_.fmaxMhz).maxOption
+        try Route.lookup(Route.Job(files, "RtAccelTop", board, part, part.speedGrade, 1), timingCache).flatMap(_.fmaxMhz)
         catch { case _: InputError => None } // no yowasp tools: nothing can have been routed here
       }
       def proxy = if (board.ecp5.isDefined) None else try {

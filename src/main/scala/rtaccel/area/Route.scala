@@ -18,12 +18,7 @@ final case class Routed(result: ujson.Obj, dir: Path, cached: Boolean) {
   * the CLOCK_MHZ of a run: a result belongs to the circuit, and the verdict against a target is the caller's.
   */
 object Route {
-  /** `targetMhz`: the clock nextpnr is told to meet (its --freq: the timing-driven placer and router work on the
-    * paths that miss it, so a target above the board's clock must reach them); the board's clock when None. */
-  final case class Job(files: Seq[Path], top: String, board: Board, part: Ecp5Part, speed: Int, seed: Int, router: String = DefaultRouter,
-                       targetMhz: Option[Double] = None) {
-    def freqMhz: Double = targetMhz.getOrElse(board.clockMhz)
-  }
+  final case class Job(files: Seq[Path], top: String, board: Board, part: Ecp5Part, speed: Int, seed: Int, router: String = DefaultRouter)
 
   /** nextpnr-ecp5's routers (TIMING_ROUTER=): router1, its default and the one every route in docs/timing.md used, and
     * router2, which routes congested designs in other ways (a different negotiation of overused wires). */
@@ -49,7 +44,7 @@ object Route {
 
   /** nextpnr's arguments; every path is relative to the folder it runs in (YoWASP's sandbox mounts its own /tmp). */
   def pnrArgs(j: Job): Seq[String] = Seq(s"--${j.part.device}", "--package", j.part.pkg, "--speed", j.speed.toString,
-    "--json", netlist, "--lpf-allow-unconstrained", "--timing-allow-fail", "--freq", f"${j.freqMhz}%.3f",
+    "--json", netlist, "--lpf-allow-unconstrained", "--timing-allow-fail", "--freq", f"${j.board.clockMhz}%.3f",
     "--seed", j.seed.toString, "--threads", "1", "--report", reportFile, "-l", pnrLog, "-q") ++
     // named only when not nextpnr's default, so that the routes cached before the choice existed keep their keys
     (if (j.router == DefaultRouter) Nil else Seq("--router", j.router))
@@ -59,29 +54,15 @@ object Route {
     TimingWrap.verilog(j.top, TimingWrap.ports(f, j.top))
   }
 
-  /** A route's folder: a digest of everything but nextpnr's target clock, then that target (routes of one circuit
-    * aimed at different clocks sit side by side, and CLOCK_MHZ=fmax finds any of them: `lookupAny`). */
-  private def key(j: Job, wrap: String): String = circuitKey(j, wrap) + f"-at${j.freqMhz}%.3f"
-  private def circuitKey(j: Job, wrap: String): String = Synthesis.hash(j.files, Seq(yosysBanner, nextpnrVersion, j.board.part,
-    j.part.device, j.part.pkg, s"speed ${j.speed}", s"seed ${j.seed}", j.top, wrap, synthScript(Nil),
-    pnrArgs(j.copy(targetMhz = Some(0))).mkString(" ")).mkString("\n"))
+  private def key(j: Job, wrap: String): String = Synthesis.hash(j.files, Seq(yosysBanner, nextpnrVersion, j.board.part,
+    j.part.device, j.part.pkg, s"speed ${j.speed}", s"seed ${j.seed}", j.top, wrap, synthScript(Nil), pnrArgs(j).mkString(" ")).mkString("\n"))
 
   /** The folder that holds (or will hold) the result of `j` under `cacheRoot`. */
   def cacheDir(j: Job, cacheRoot: Path): Path = cacheRoot.resolve(key(j, wrapper(j)._1))
 
-  /** The cached result of `j`, if there is one. */
-  def lookup(j: Job, cacheRoot: Path): Option[Routed] = read(cacheDir(j, cacheRoot))
-
-  /** The cached routes of `j`'s circuit, part, grade, seed and router at any target clock (CLOCK_MHZ=fmax reads
-    * them without routing). */
-  def lookupAny(j: Job, cacheRoot: Path): Seq[Routed] = {
-    val prefix = circuitKey(j, wrapper(j)._1) + "-at"
-    if (!Files.isDirectory(cacheRoot)) Nil
-    else Files.list(cacheRoot).toArray.map(_.asInstanceOf[Path]).filter(_.getFileName.toString.startsWith(prefix))
-      .sortBy(_.getFileName.toString).toSeq.flatMap(read)
-  }
-
-  private def read(dir: Path): Option[Routed] = {
+  /** The cached result of `j`, if there is one (CLOCK_MHZ=fmax reads it without routing). */
+  def lookup(j: Job, cacheRoot: Path): Option[Routed] = {
+    val dir = cacheDir(j, cacheRoot)
     val f = dir.resolve(resultFile)
     if (Files.isRegularFile(f)) Some(Routed(ujson.read(Files.readString(f)).obj, dir, cached = true)) else None
   }
@@ -167,7 +148,7 @@ object Route {
     val dir = cacheRoot.resolve(key(j, wrap))
     val work = dir.resolve("work")
     val res = ujson.Obj("top" -> j.top, "part" -> j.board.part, "device" -> j.part.device, "package" -> j.part.pkg,
-      "speed_grade" -> j.speed, "seed" -> j.seed, "nextpnr_target_mhz" -> j.freqMhz, "wrapper_ff" -> wrapFf,
+      "speed_grade" -> j.speed, "seed" -> j.seed, "nextpnr_target_mhz" -> j.board.clockMhz, "wrapper_ff" -> wrapFf,
       "yosys_version" -> yosysVersion, "nextpnr_version" -> nextpnrVersion)
     val syn = synthesized(j, wrap, cacheRoot, what, say)
     deleteTree(work) // an interrupted run's

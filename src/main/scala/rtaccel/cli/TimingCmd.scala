@@ -15,11 +15,11 @@ object TimingCmd {
   /** The board routed on when BOARD= is not given. */
   val DefaultBoard = "ecp5-85"
 
-  def main0(asked: Args): Unit = {
+  def main0(given: Args): Unit = {
     val t0 = System.nanoTime()
     // the default board stands for BOARD= everywhere, the circuit's PIPELINE budget included: without it the preset
     // would be pipelined for its own board's family and clock, and routed on another
-    val a = if (asked.opt("board").isDefined) asked else Args(asked.kv + ("board" -> DefaultBoard))
+    val a = if (given.opt("board").isDefined) given else Args(given.kv + ("board" -> DefaultBoard))
     val catalog = a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath)
     val board = Boards.byName(a.need("board"), catalog)
     val part = board.ecp5.getOrElse(throw new InputError(s"BOARD=${board.name} is a ${board.family} board; make timing routes " +
@@ -49,7 +49,7 @@ object TimingCmd {
       val modules = files.map(_.getFileName.toString.stripSuffix(".sv")).toSet
       if (!modules(unit))
         throw new InputError(s"UNIT=$unit is not a module of config '${p.name}'; choose one of ${modules.toSeq.sorted.mkString(", ")}")
-      (1 to seeds).map(s => Route.run(Route.Job(files, unit, board, part, speed, s, router, Some(target)), cache, s"$unit of '${p.name}'", say))
+      (1 to seeds).map(s => Route.run(Route.Job(files, unit, board, part, speed, s, router), cache, s"$unit of '${p.name}'", say))
     } finally Files.walk(rtl).toArray.map(_.asInstanceOf[Path]).sortBy(-_.getNameCount).foreach(Files.delete)
 
     // the median run (the lower of the middle two for an even count): a real run whose path is reported whole
@@ -58,7 +58,7 @@ object TimingCmd {
     val j = ujson.Obj.from(rtaccel.config.Knobs.echo(p, "timing") ++
       Seq[(String, ujson.Value)]("board" -> board.name, "family" -> board.family, "unit" -> unit))
     val r = shown.result
-    j("fmax_mhz") = r("fmax_mhz"); j("target_mhz") = target; j("nextpnr_target_mhz") = r.value.getOrElse("nextpnr_target_mhz", ujson.Null)
+    j("fmax_mhz") = r("fmax_mhz"); j("target_mhz") = target
     j("clock_source") = if (a.opt("clock-mhz").isDefined) p.clockSource else "board"
     val met = shown.fits && shown.fmaxMhz.exists(_ >= target)
     j("met") = met

@@ -102,7 +102,7 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(names("Unused") == Set("Unused", "Top", "Mid", "Leaf", "LeafX"))
   }
 
-  test("a target the unit misses exits 3 with the JSON printed last; nextpnr is told that target") {
+  test("a target the unit misses exits 3 with the JSON printed last") {
     assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
     // PIPELINE at the budget auto gives for ecp5-85's clock: the circuit the test above routed, its route cached
     val budget = Timing.forFamily("ecp5").levelsFor(Boards.byName("ecp5-85").clockMhz)
@@ -110,9 +110,7 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(code == 3, err)
     val j = last(out)
     assert(!j("met").bool && j("target_mhz").num == 2000 && j("clock_source").str == "given" && j("fmax_mhz").num < 2000)
-    // the circuit the first test routed, its synthesis reused; the route is aimed at 2000 MHz, so it is a route of its own
-    assert(j("nextpnr_target_mhz").num == 2000 && j("synth_cached").bool && !j("cached").bool, j.toString)
-    assert(Files.readString(Paths.get(j("cache").str).resolve("nextpnr.log")).contains("2000.00 MHz"), "nextpnr's --freq")
+    assert(j("cached").bool, "the same circuit as the first route: its result is reused")
     assert(err.contains("< target 2000.0 MHz"), err)
   }
 
