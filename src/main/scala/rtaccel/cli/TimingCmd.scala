@@ -15,11 +15,11 @@ object TimingCmd {
   /** The board routed on when BOARD= is not given. */
   val DefaultBoard = "ecp5-85"
 
-  def main0(given: Args): Unit = {
+  def main0(asked: Args): Unit = {
     val t0 = System.nanoTime()
     // the default board stands for BOARD= everywhere, the circuit's PIPELINE budget included: without it the preset
     // would be pipelined for its own board's family and clock, and routed on another
-    val a = if (given.opt("board").isDefined) given else Args(given.kv + ("board" -> DefaultBoard))
+    val a = if (asked.opt("board").isDefined) asked else Args(asked.kv + ("board" -> DefaultBoard))
     val catalog = a.opt("catalog").map(Paths.get(_)).getOrElse(Boards.defaultPath)
     val board = Boards.byName(a.need("board"), catalog)
     val part = board.ecp5.getOrElse(throw new InputError(s"BOARD=${board.name} is a ${board.family} board; make timing routes " +
