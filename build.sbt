@@ -1,4 +1,4 @@
-// One Scala project: reference model, BVH builder, config and (later) the Chisel generators.
+// One Scala project: reference model, BVH builder, config, the Chisel generators of the platform and the tools around them.
 // Versions are the stack verified to resolve from Maven Central (see docs/toolchain.md).
 ThisBuild / scalaVersion := "2.13.15"
 ThisBuild / version      := "0.1.0"

@@ -106,7 +106,7 @@ final case class HwLimits(
   val stepMax: Long = (1L << stepBits) - 1
 }
 
-/** The one configuration object for the reference model, analysis and (later) the RTL generators.
+/** The one configuration object for the reference model, analysis, the RTL generators and the cost and timing tools.
   * User-facing knobs first; derived sizes follow; every illegal combination fails here with a message
   * that says what to change.
   */
