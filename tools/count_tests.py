@@ -7,6 +7,7 @@ report is counted by the caller (.ci/run), not here.
 and sbt's own report of a failure is far above it.
 """
 import argparse
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -47,7 +48,6 @@ if __name__ == "__main__":
     ap.add_argument("--failures", action="store_true", help="name each failed test and its message on stderr first")
     a = ap.parse_args()
     if a.failures:
-        import sys
         for name, text in failures(a.folder):
             print(f"FAILED {name}\n  {text}", file=sys.stderr)
     p, f, s = count(a.folder)

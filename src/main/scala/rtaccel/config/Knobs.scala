@@ -90,16 +90,16 @@ object Knobs {
     */
   final case class Calibration(values: Seq[String], effective: PlatformParams => String)
 
-  /** `why`: a reason the refusal of a value outside the domain adds (the rule alone does not say it).
-    * `echo`: the keys under which the JSON last line of every command that reads the knob reports the value it ran
-    * with (resolved: a fitted format, the board's clock), from the resolved platform; several knobs may share one
-    * key (the formats' `numerics`, the caches' `caches`). Empty only for a knob that is not a value of the platform
-    * (CATALOG: a file to read boards from). */
   /** A register field through which the host reads the value a circuit was built with (REGISTER.FIELD of top.RegMap,
     * docs/registers.md) and what the circuit of `p` holds there: RtAccelTop.configWords encodes the read-only
     * configuration words from these; in a RW register it is the reset value (RegFileSpec). */
   final case class Field(name: String, value: PlatformParams => Long)
 
+  /** `why`: a reason the refusal of a value outside the domain adds (the rule alone does not say it).
+    * `echo`: the keys under which the JSON last line of every command that reads the knob reports the value it ran
+    * with (resolved: a fitted format, the board's clock), from the resolved platform; several knobs may share one
+    * key (the formats' `numerics`, the caches' `caches`). Empty only for a knob that is not a value of the platform
+    * (CATALOG: a file to read boards from). */
   final case class Knob(make: String, flag: String, help: String, domain: Domain, shapes: Boolean, commands: Set[String],
                         calibrated: Option[Calibration] = None, why: String = "",
                         echo: PlatformParams => Seq[(String, ujson.Value)] = _ => Nil, fields: Seq[Field] = Nil,
@@ -124,7 +124,7 @@ object Knobs {
   private def cal(values: String*)(effective: PlatformParams => String) = Some(Calibration(values, effective))
   private def bit(b: Boolean) = if (b) "1" else "0"
   private def flag(b: Boolean): Long = if (b) 1L else 0L
-  private def log2(n: Int): Long = 32 - Integer.numberOfLeadingZeros(n - 1)
+  private def log2(n: Int): Long = chisel3.util.log2Ceil(n).toLong
   private def at(name: String)(value: PlatformParams => Long) = Field(name, value)
   private def cacheKnobs(prefix: String, what: String): Seq[Knob] = {
     val P = prefix.toUpperCase
@@ -134,8 +134,9 @@ object Knobs {
         if (prefix == "node") Use.platform - "bench-caches" else Use.platform),
       Knob(s"${P}_WAYS", s"$prefix-ways", s"$what cache ways", Ints(1, 64, pow2 = true), shapes = true, Use.platform),
       Knob(s"${P}_POLICY", s"$prefix-policy", s"$what cache replacement policy", policies, shapes = true, Use.platform))
-      .zip(Seq(Seq[(String, CacheParams => Long)]("LOG2_ENTRIES" -> (c => if (c.entries > 0) log2(c.entries) else 0L), "PRESENT" -> (c => flag(c.entries > 0))),
-        Seq[(String, CacheParams => Long)]("WAYS" -> (_.ways.toLong)), Seq[(String, CacheParams => Long)]("POLICY" -> (c => CachePolicy.code(c.policy).toLong))))
+      .zip(Seq[Seq[(String, CacheParams => Long)]](
+        Seq("LOG2_ENTRIES" -> (c => if (c.entries > 0) log2(c.entries) else 0L), "PRESENT" -> (c => flag(c.entries > 0))),
+        Seq("WAYS" -> (_.ways.toLong)), Seq("POLICY" -> (c => CachePolicy.code(c.policy).toLong))))
       .map { case (k, fs) => k.echoes(caches).reads(fs.map { case (f, v) => at(s"${P}_CACHE.$f")(p => v(c(p))) }: _*) }
   }
 
