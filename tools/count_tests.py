@@ -11,7 +11,7 @@ import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-MESSAGE_CHARS = 600
+MESSAGE_CHARS = 1200
 
 
 def cases(folder: Path):

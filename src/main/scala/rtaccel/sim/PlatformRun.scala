@@ -74,7 +74,11 @@ object PlatformRun {
   }
 
   /** RTL against the model, ray by ray: raw bits of every field, and each fault flag against the model's record. */
-  final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int, stepLimitDisagree: Int)
+  final case class Comparison(mismatch: Int, lost: Int, overflowDisagree: Int, readErrorDisagree: Int, stepLimitDisagree: Int,
+                              examples: ujson.Arr)
+
+  /** How many differing rays a run's JSON shows side by side (enough to see a pattern, short enough for a log's tail). */
+  val mismatchExamples = 4
 
   /** `mayFail`: MEM_ERROR_MODE=transient with MEM_RETRIES=0, where which ray first reads a poisoned beat depends on
     * timing: the rays that may come back flagged read error (those whose traversal reads a poisoned beat). Such a ray
@@ -84,14 +88,22 @@ object PlatformRun {
     def bits(f: Float) = java.lang.Float.floatToRawIntBits(f)
     val h = rtl.hits; val got = rtl.seen.indices.filter(rtl.seen(_) >= 1)
     val excused = (i: Int) => mayFail.exists(m => m(i) && rtl.readError(i) && h.prim(i) == rtaccel.scene.Hits.ReadError)
+    val differs = got.filter(i => !excused(i) && (h.prim(i) != model.prim(i) || bits(h.t(i)) != bits(model.t(i)) ||
+      bits(h.u(i)) != bits(model.u(i)) || bits(h.v(i)) != bits(model.v(i))))
+    // a record as raw bits (t, u, v in hex) and its fault flags, the RTL's and the model's
+    def record(x: Hits, i: Int, ov: Boolean, re: Boolean, sl: Boolean) =
+      f"prim ${x.prim(i)} t ${bits(x.t(i))}%08x u ${bits(x.u(i))}%08x v ${bits(x.v(i))}%08x${if (ov) " overflow" else ""}" +
+        s"${if (re) " read_error" else ""}${if (sl) " step_limit" else ""}"
     Comparison(
-      mismatch = got.count(i => !excused(i) && (h.prim(i) != model.prim(i) || bits(h.t(i)) != bits(model.t(i)) ||
-        bits(h.u(i)) != bits(model.u(i)) || bits(h.v(i)) != bits(model.v(i)))),
+      mismatch = differs.length,
       lost = rtl.seen.count(_ == 0),
       // each flag against the model's own flag: a ray that overflowed and read an error carries both
       overflowDisagree = got.count(i => !excused(i) && rtl.overflow(i) != flags.overflowRays(i)),
       readErrorDisagree = got.count(i => !excused(i) && rtl.readError(i) != flags.readErrorRays(i)),
-      stepLimitDisagree = got.count(i => !excused(i) && rtl.stepLimit(i) != flags.stepLimitRays(i)))
+      stepLimitDisagree = got.count(i => !excused(i) && rtl.stepLimit(i) != flags.stepLimitRays(i)),
+      examples = ujson.Arr.from(differs.take(mismatchExamples).map(i => ujson.Obj("ray" -> i,
+        "rtl" -> record(h, i, rtl.overflow(i), rtl.readError(i), rtl.stepLimit(i)),
+        "model" -> record(model, i, flags.overflowRays(i), flags.readErrorRays(i), flags.stepLimitRays(i))))))
   }
 
   /** A digest of every parameter, beside the build key's readable part: a knob that part does not name still gets a
@@ -255,7 +267,7 @@ object PlatformRun {
       val json = ujson.Obj.from(rtaccel.config.Knobs.echo(p, "simulate") ++ Seq[(String, ujson.Value)](
         "rays" -> rays.count, "cycles" -> cycles.toDouble,
         "rays_per_s_at_clock" -> n / math.max(1, cycles) * p.cyclesPerSecond,
-        "mismatch_vs_model" -> mismatch, "lost" -> lost, "duplicated" -> duplicated,
+        "mismatch_vs_model" -> mismatch, "mismatch_examples" -> cmp.examples, "lost" -> lost, "duplicated" -> duplicated,
         "node_bytes_per_ray" -> counters("node_requests") * p.nodeAccessBytes / n,
         // packed: the MC's requested bytes less the nodes' (leafBytes per leaf, whole beats)
         "prim_bytes_per_ray" -> (if (p.primPacked) (counters("mem_bytes") - counters("node_requests") * p.nodeStrideBytes).toDouble

@@ -63,7 +63,7 @@ class PlatformSpec extends AnyFunSuite {
     info(f"TUs=$tus M=$m MPPL=$mppl: ${j("cycles").num}%.0f cycles, ${j("sim_cycles_per_wall_s").num}%.0f cycles/s, " +
       f"mismatch ${j("mismatch_vs_model").num}%.0f lost ${j("lost").num}%.0f dup ${j("duplicated").num}%.0f")
     assert(j("timed_out").bool == false, "the platform did not finish")
-    assert(j("mismatch_vs_model").num == 0 && j("lost").num == 0 && j("duplicated").num == 0, ujson.write(j))
+    assert(j("mismatch_vs_model").num == 0 && j("lost").num == 0 && j("duplicated").num == 0, brief(j))
     assert(j("overflowed").num == j("model_overflowed").num && j("overflow_disagreements").num == 0)
     // transient errors without re-reads: timing decides which ray reads a poisoned beat first (PlatformRun excuses
     // exactly the rays that read one), so only the flags' agreement is checked
@@ -72,7 +72,7 @@ class PlatformSpec extends AnyFunSuite {
     assert(j("read_error_disagreements").num == 0)
     assert(j("health")("retries").num == j("counters")("mem_retries").num && j("mem_retry_limit").num == retries)
     assert(j("step_limit_rays").num == j("model_step_limit_rays").num && j("step_limit_disagreements").num == 0)
-    assert(j("ok").bool && j("failures").arr.isEmpty, ujson.write(j))
+    assert(j("ok").bool && j("failures").arr.isEmpty, brief(j))
     // the hit stream's TLAST on the batch's last hit only; "usable" counts the records without a fault flag
     assert(j("hit_tlast")("beats").num == 1 && j("hit_tlast")("at").num == rays.count - 1, ujson.write(j("hit_tlast")))
     assert(j("health")("usable").num == (0 until rays.count).count(i => o.hits.prim(i) >= -1), ujson.write(j("health")))
@@ -88,6 +88,14 @@ class PlatformSpec extends AnyFunSuite {
       }
     } else assert(j("node_cache")("entries").num == 0 && j("prim_cache")("entries").num == 0, "an uncached run must build no cache")
     o
+  }
+
+  /** A failed run's figures first, then its whole JSON: make test's log keeps only a failure message's start. */
+  private def brief(j: ujson.Value): String = {
+    def n(k: String) = f"${j(k).num}%.0f"
+    s"${j("mem_error_mode").str} errors at rate ${j("mem_error_rate").num}, mismatch ${n("mismatch_vs_model")} lost ${n("lost")} " +
+      s"dup ${n("duplicated")}, read errors ${n("read_errors")} (model ${n("model_read_errors")}), retries ${n("mem_retries")}, " +
+      s"failures ${ujson.write(j("failures"))}, first differing rays ${ujson.write(j("mismatch_examples"))}; ${ujson.write(j)}"
   }
 
   // make test: the fixed-stage grid circuit has a 3-entry stack, so that the rays that overflow it (prim -3) are
