@@ -177,11 +177,14 @@ object PlatformRun {
       s"-p${paramsDigest(p.copy(maxSteps = None))}"
     val work = Paths.get(o.work).resolve(key) // relative: chiseltest wants a relative target folder
     Files.createDirectories(work)
-    val layout = ImageFile.write(img, axi, work.resolve("image.hex"))
+    // the memory image and the rays, whose absolute names the harness's $readmemh holds (SimSetup.maxFileNameChars)
+    val inputs = SimSetup.inputDir(Paths.get(o.work), key).toAbsolutePath
+    Files.createDirectories(inputs)
+    val layout = ImageFile.write(img, axi, inputs.resolve("image.hex"))
     require(layout.words <= wordCap, s"image of ${layout.words} words exceeds the simulator's $wordCap")
     require(layout == lay0, "the image layout the model's fault map assumed differs from the one written")
-    RaysFile.write(rays, work.resolve("rays.hex"))
-    val setup = SimSetup(rayCap, work.resolve("rays.hex").toAbsolutePath.toString, work.resolve("image.hex").toAbsolutePath.toString,
+    RaysFile.write(rays, inputs.resolve("rays.hex"))
+    val setup = SimSetup(rayCap, inputs.resolve("rays.hex").toString, inputs.resolve("image.hex").toString,
       wordCap, dram, hostStallPercent = o.hostStall, seed = o.seed, accessLogCapacity = logCap)
     val maxCycles = o.maxCycles.getOrElse(1000000L + 200000L * rays.count)
     System.err.println(s"[simulate] ${rays.count} rays, ${p.tus} TUs, M=${p.m}, MPPL=${p.mppl}: Verilator build (${build.name}) in $work")

@@ -18,6 +18,9 @@ final case class SimSetup(rayCapacity: Int, raysHex: String, imageHex: String, i
   require(rayCapacity >= 1 && Integer.bitCount(rayCapacity) == 1, "ray capacity must be a power of two")
   require(imageWords >= 1 && Integer.bitCount(imageWords) == 1, "image capacity must be a power of two")
   require(hostStallPercent >= 0 && hostStallPercent < 100, "host stall percentage must be 0..99")
+  for (f <- Seq(raysHex, imageHex) if f.length > SimSetup.maxFileNameChars) throw new rtaccel.io.InputError(
+    s"the simulator's input file $f is ${f.length} characters long; Verilator reads at most ${SimSetup.maxFileNameChars} " +
+      "characters of a $readmemh file name: move the checkout to a shorter path")
 }
 
 object SimSetup {
@@ -30,6 +33,16 @@ object SimSetup {
     * for every dram.seed and their jitter does not move in lockstep. A simulation choice, no hardware's.
     */
   val channelSeedStep = 7919
+  /** The longest `$readmemh` file name Verilator 5.006 takes: it copies the name into a buffer of
+    * VL_VALUE_STRING_MAX_CHARS (256) characters without a bound (VL_CVT_PACK_STR_NW), so a longer name overruns its
+    * stack, which loaded a wrong memory image at one checkout's path and not at another's. */
+  val maxFileNameChars = 256
+  /** Where a simulator build's input files go: a short folder named by the digest of the build's key, beside the
+    * builds in `work`, so that their absolute names stay far below [[maxFileNameChars]] however long the key. */
+  def inputDir(work: java.nio.file.Path, key: String): java.nio.file.Path = {
+    val d = java.security.MessageDigest.getInstance("SHA-256").digest(key.getBytes("UTF-8")).take(6).map(b => f"${b & 0xff}%02x").mkString
+    work.resolve("inputs").resolve(d)
+  }
   def pow2(n: Long): Int = { var c = 1L; while (c < n) c <<= 1; require(c <= (1 << 30), s"$n entries is too large to simulate"); c.toInt }
   /** The smallest capacities `make simulate` builds (simulator memory only, no hardware's): every frame up to
     * 128×96 + 5 bounces on every scene up to the paper's sizes (conference's image, the larger, is 29 MB) then lands
