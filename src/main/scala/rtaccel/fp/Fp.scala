@@ -572,7 +572,8 @@ object Fp {
     mulCore(Stager.none, f, comb(a), comb(b), fo, toPos.map(combB)).v
 
   // ---------------------------------------------------------------------------------------------------------
-  // div: restoring radix-2 digit recurrence, split into pre / step / post so FpDivPipe can register between them
+  // div: radix-2 digit recurrence (the restoring one's bits, carried non-restoring), split into pre / step / post so
+  // FpDivPipe can register between them
 
   /** State carried between divider steps. A special result (NaN, ±inf, ±0) is three class flags plus the sign,
     * so pipeline registers don't carry a whole word for it.
@@ -584,7 +585,8 @@ object Fp {
     val sign = Bool()
     val exp = SInt(expW(f).W)
     val divisor = UInt((f.manBits + 1).W)
-    val rem = UInt((f.manBits + 2).W)
+    /** The partial remainder less the divisor, two's complement in [-divisor, divisor) (divStep). */
+    val rem = UInt((f.manBits + 3).W)
     val quo = UInt((f.manBits + 3).W)
   }
 
@@ -617,26 +619,34 @@ object Fp {
     s
   }
 
-  /** divPre's second half: both significands normalised, the exponent corrected by their shifts. */
+  /** divPre's second half: both significands normalised, the exponent corrected by their shifts, and the first
+    * partial remainder less the divisor (divStep's state). */
   def divPreShift(f: FpFormat, m: DivPreMid): DivState = {
     val s = Wire(new DivState(f))
     s.resNaN := m.resNaN; s.resInf := m.resInf; s.resZero := m.resZero; s.sign := m.sign
     s.exp := m.exp - m.lzA.zext + m.lzB.zext
-    s.divisor := shlTrunc(m.divisor, m.lzB)
-    s.rem := shlTrunc(m.rem(f.manBits, 0), m.lzA)
+    val d = shlTrunc(m.divisor, m.lzB)
+    s.divisor := d
+    s.rem := (shlTrunc(m.rem(f.manBits, 0), m.lzA).pad(f.manBits + 3) - d.pad(f.manBits + 3))(f.manBits + 2, 0)
     s.quo := 0.U
     s
   }
 
   def divPre(f: FpFormat, a: UInt, b: UInt): DivState = divPreShift(f, divPreCount(f, a, b))
 
+  /** One quotient bit of the restoring recurrence (the bit is 1 when the partial remainder r >= d, and r becomes
+    * 2 (r - d) or 2 r), carried non-restoring: the state holds u = r - d, whose sign is the bit, and the next
+    * u = 2 r' - d is 2 u - d after a 1 and 2 u + d after a 0. One add or subtract on one carry chain (the choice in
+    * the chain's LUTs, as the adder's), where the restoring form built a compare, a subtract and a mux: the same
+    * bits, u staying in [-d, d). */
   def divStep(f: FpFormat, in: DivState): DivState = {
     val s = Wire(new DivState(f))
     s := in
-    val ge = in.rem >= in.divisor
-    val r = Mux(ge, in.rem - in.divisor, in.rem) // < divisor
-    s.rem := (r << 1)(f.manBits + 1, 0)
-    s.quo := Cat(in.quo(f.manBits + 1, 0), ge)
+    val w = f.manBits + 3
+    val q = !in.rem(w - 1)
+    val twice = Cat(in.rem(w - 2, 0), 0.U(1.W))
+    s.rem := (twice +& (in.divisor.pad(w) ^ Fill(w, q)) +& q.asUInt)(w - 1, 0)
+    s.quo := Cat(in.quo(f.manBits + 1, 0), q)
     s
   }
 
@@ -647,7 +657,9 @@ object Fp {
     */
   def divPostT(pipe: Stager, f: FpFormat, x: Timed[DivState]): Timed[UInt] = {
     val r = pipe.step(x, Depth.reduce(f.manBits + 2) + 1) { s =>
-      roundIn(s.sign, s.exp, s.quo, s.rem =/= 0.U, None, special(s.resNaN, s.resInf, s.resZero, s.sign))
+      // the remainder is zero when u = -d (u = 2 r - d with r = 0)
+      roundIn(s.sign, s.exp, s.quo, s.rem =/= (0.U((f.manBits + 3).W) - s.divisor.pad(f.manBits + 3))(f.manBits + 2, 0), None,
+        special(s.resNaN, s.resInf, s.resZero, s.sign))
     }
     roundPackT(pipe, f, r, maxLeftShift = 1)
   }

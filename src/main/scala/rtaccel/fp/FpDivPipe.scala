@@ -4,7 +4,7 @@ import chisel3._
 import chisel3.util._
 
 /** Fully pipelined divider: accepts one a/b per cycle, result `latency` cycles later, bit-identical to [[Fp.div]].
-  * The divider is Fp.divPre, divSteps(f) restoring recurrence steps and Fp.divPost (round/pack).
+  * The divider is Fp.divPre, divSteps(f) non-restoring recurrence steps and Fp.divPost (round/pack).
   * With a budget (PIPELINE=auto or <levels>), registers go wherever a path would pass `budget` LUT levels and the
   * result leaves from a register (a consumer in another module starts its own path there); without one, `stages`
   * register levels are spread over the chain by estimated delay (0 = combinational), the depths of before
@@ -57,8 +57,10 @@ object FpDivPipe {
   private val postWeight = 4.0
   /** LUT levels assumed in front of the divider's inputs (a selection in the caller's stage). */
   val inputDepth: Int = 1
-  /** One restoring step: the compare on a carry chain (ABC puts LUTs in front of it), the selection of the
-    * remainder and the subtract (measured: about four levels for fp32 on xc5v, docs/timing.md).
+  /** One step: the estimate of the restoring step it replaced (the compare on a carry chain, the selection of the
+    * remainder and the subtract: about four levels measured for fp32 on xc5v, docs/timing.md). The non-restoring step
+    * is one add or subtract on a carry chain, fewer levels; the estimate stays until routes confirm a tighter one,
+    * so every pipeline's latency stays what it was.
     */
   private[fp] def stepLevels(f: FpFormat): Int = Depth.carry(f.manBits + 2) + 2
 
