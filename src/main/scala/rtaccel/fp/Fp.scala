@@ -627,12 +627,17 @@ object Fp {
     s.exp := m.exp - m.lzA.zext + m.lzB.zext
     val d = shlTrunc(m.divisor, m.lzB)
     s.divisor := d
-    s.rem := (shlTrunc(m.rem(f.manBits, 0), m.lzA).pad(f.manBits + 3) - d.pad(f.manBits + 3))(f.manBits + 2, 0)
+    s.rem := minus(shlTrunc(m.rem(f.manBits, 0), m.lzA), d, f.manBits + 3)
     s.quo := 0.U
     s
   }
 
   def divPre(f: FpFormat, a: UInt, b: UInt): DivState = divPreShift(f, divPreCount(f, a, b))
+
+  /** a - b as w bits of two's complement (a, b unsigned, narrower than w), written as a + ~b + 1: firtool 1.62.1
+    * folded `(a.pad(w) - b.pad(w))` with a constant a (a reciprocal's 1.0) as if the difference's top bit were always
+    * 0 (its borrow lost), and every reciprocal of the non-restoring divider came out wrong. */
+  private def minus(a: UInt, b: UInt, w: Int): UInt = (a.pad(w) +& (~b.pad(w))(w - 1, 0) +& 1.U)(w - 1, 0)
 
   /** One quotient bit of the restoring recurrence (the bit is 1 when the partial remainder r >= d, and r becomes
     * 2 (r - d) or 2 r), carried non-restoring: the state holds u = r - d, whose sign is the bit, and the next
@@ -658,7 +663,7 @@ object Fp {
   def divPostT(pipe: Stager, f: FpFormat, x: Timed[DivState]): Timed[UInt] = {
     val r = pipe.step(x, Depth.reduce(f.manBits + 2) + 1) { s =>
       // the remainder is zero when u = -d (u = 2 r - d with r = 0)
-      roundIn(s.sign, s.exp, s.quo, s.rem =/= (0.U((f.manBits + 3).W) - s.divisor.pad(f.manBits + 3))(f.manBits + 2, 0), None,
+      roundIn(s.sign, s.exp, s.quo, s.rem =/= minus(0.U, s.divisor, f.manBits + 3), None,
         special(s.resNaN, s.resInf, s.resZero, s.sign))
     }
     roundPackT(pipe, f, r, maxLeftShift = 1)

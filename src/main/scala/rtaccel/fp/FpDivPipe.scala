@@ -57,12 +57,11 @@ object FpDivPipe {
   private val postWeight = 4.0
   /** LUT levels assumed in front of the divider's inputs (a selection in the caller's stage). */
   val inputDepth: Int = 1
-  /** One step: the estimate of the restoring step it replaced (the compare on a carry chain, the selection of the
-    * remainder and the subtract: about four levels measured for fp32 on xc5v, docs/timing.md). The non-restoring step
-    * is one add or subtract on a carry chain, fewer levels; the estimate stays until routes confirm a tighter one,
-    * so every pipeline's latency stays what it was.
+  /** One non-restoring step: an add or subtract on one carry chain, its choice in the chain's LUTs (the restoring
+    * step it replaced, a compare, a subtract and a mux, was estimated 3 and measured about 4 levels for fp32 on xc5v,
+    * docs/timing.md).
     */
-  private[fp] def stepLevels(f: FpFormat): Int = Depth.carry(f.manBits + 2) + 2
+  private[fp] def stepLevels(f: FpFormat): Int = Depth.carry(f.manBits + 3)
 
   /** Register levels after each of the divSteps(f)+2 chain units; sums to `stages`. Cut j (1..stages) goes
     * after the unit whose cumulative delay is nearest to j/(stages+1) of the total, so the stages are balanced.
