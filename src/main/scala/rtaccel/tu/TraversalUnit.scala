@@ -168,19 +168,24 @@ class TraversalUnit(p: TuParams) extends Module {
     when(t.last) { state := S.pop }
   }
 
+  // A pop loads `cur` whatever its entry's distance: an entry beyond tmax leaves the TU in the pop state, where `cur`
+  // is not read, and the next pop or the end overwrites it. So the distance compare drives only the next state, not
+  // the enable of 32 flip-flops (the smallest platform's routed critical path on ECP5 ended at `cur`, docs/timing.md)
   when(state === S.pop) {
     ss match {
       case Some(s) =>
         when(!s.empty) {
           val top = s.pop()
-          when(!Fp.gt(f, top.t, tmax)) { cur := top.cref; state := S.issue }
+          cur := top.cref
+          when(!Fp.gt(f, top.t, tmax)) { state := S.issue }
         }.elsewhen(s.anyDropped && s.level =/= 0.U) { s.restart(); cur := 0.U; state := S.issue } // from the root again
           .otherwise { state := S.done } // nothing pending and nothing dropped, or the root itself is finished
       case None =>
         when(stack.get.empty) { state := S.done }
           .otherwise {
             val top = stack.get.pop()
-            when(!Fp.gt(f, top.t, tmax)) { cur := top.cref; state := S.issue }
+            cur := top.cref
+            when(!Fp.gt(f, top.t, tmax)) { state := S.issue }
           }
     }
   }
