@@ -1,7 +1,6 @@
 package rtaccel.area
 
 import java.nio.file.{Files, Path, StandardCopyOption}
-import java.security.MessageDigest
 import scala.collection.mutable
 
 /** One cached Yosys synthesis of a circuit: resources rolled up per module, instance counts under the top and
@@ -109,9 +108,7 @@ object Synthesis {
 
   /** The cache key of a circuit: its Verilog files (names and bytes) and `extra` (tools, target, recipe). */
   private[area] def hash(files: Seq[Path], extra: String): String = {
-    val md = MessageDigest.getInstance("SHA-256")
-    for (f <- files.sortBy(_.getFileName.toString)) { md.update(f.getFileName.toString.getBytes); md.update(Files.readAllBytes(f)) }
-    md.update(extra.getBytes)
-    md.digest().take(12).map("%02x".format(_)).mkString
+    val named = files.sortBy(_.getFileName.toString).flatMap(f => Seq(f.getFileName.toString.getBytes("UTF-8"), Files.readAllBytes(f)))
+    rtaccel.io.Digest.hex(12, named :+ extra.getBytes("UTF-8"): _*)
   }
 }

@@ -387,10 +387,9 @@ object Fp {
     val canUnderflow = fo.bias < f.bias
     val ew = if (canUnderflow) expW(f) max expW(fo) else log2Ceil((1 << f.expBits) - f.bias + fo.bias + 1) + 1
     val sum = pipe.step(al, Depth.carry(m + 5) + Depth.reduce(m + 5)) { r =>
-      // one carry chain for both: x - y = x + ~y + 1 (y <= x, so it never wraps), the inversion in the chain's LUTs;
-      // Mux(effSub, x - y, x + y) built two chains and a mux behind them
+      // one carry chain for both (y <= x, so the difference never wraps); the top bit is the carry's position
       val w = m + 5
-      val res = (r.xExt +& (r.yExt ^ Fill(w, r.effSub)) +& r.effSub.asUInt)(w - 1, 0) // top bit = carry position
+      val res = addOrSub(r.xExt, r.yExt, r.effSub, w)
       // exp = xExp + 1 >= 2 in f; a narrower exponent range can underflow
       val exp = r.xExp.zext.pad(ew) + (1 - f.bias + fo.bias).S
       val isZero = res === 0.U
@@ -637,7 +636,12 @@ object Fp {
   /** a - b as w bits of two's complement (a, b unsigned, narrower than w), written as a + ~b + 1: firtool 1.62.1
     * folded `(a.pad(w) - b.pad(w))` with a constant a (a reciprocal's 1.0) as if the difference's top bit were always
     * 0 (its borrow lost), and every reciprocal of the non-restoring divider came out wrong. */
-  private def minus(a: UInt, b: UInt, w: Int): UInt = (a.pad(w) +& (~b.pad(w))(w - 1, 0) +& 1.U)(w - 1, 0)
+  private def minus(a: UInt, b: UInt, w: Int): UInt = addOrSub(a, b, true.B, w)
+
+  /** x + y, or x - y = x + ~y + 1 when `sub`, as w bits of two's complement (x, y unsigned, at most w bits): one carry
+    * chain with the inversion in its LUTs, where Mux(sub, x - y, x + y) builds two chains and a mux behind them (the
+    * adder's sum and the divider's step). */
+  private def addOrSub(x: UInt, y: UInt, sub: Bool, w: Int): UInt = (x.pad(w) +& (y.pad(w) ^ Fill(w, sub)) +& sub.asUInt)(w - 1, 0)
 
   /** One quotient bit of the restoring recurrence (the bit is 1 when the partial remainder r >= d, and r becomes
     * 2 (r - d) or 2 r), carried non-restoring: the state holds u = r - d, whose sign is the bit, and the next
@@ -650,7 +654,7 @@ object Fp {
     val w = f.manBits + 3
     val q = !in.rem(w - 1)
     val twice = Cat(in.rem(w - 2, 0), 0.U(1.W))
-    s.rem := (twice +& (in.divisor.pad(w) ^ Fill(w, q)) +& q.asUInt)(w - 1, 0)
+    s.rem := addOrSub(twice, in.divisor, q, w)
     s.quo := Cat(in.quo(f.manBits + 1, 0), q)
     s
   }

@@ -26,9 +26,7 @@ object FirtoolHarness {
   def shell[M <: Module, I <: Data](gen: => M, dir: Path)(io: M => I): Shell[M, I] = {
     var top: Option[M] = None
     val files = rtaccel.cli.EmitVerilog.emitModule({ val m = gen; top = Some(m); m }, dir)
-    val sha = java.security.MessageDigest.getInstance("SHA-256")
-    files.foreach(f => sha.update(Files.readAllBytes(f)))
-    val digest = sha.digest().take(6).map(b => f"${b & 0xff}%02x").mkString
+    val digest = rtaccel.io.Digest.hex(6, files.map(f => Files.readAllBytes(f)): _*)
     val m = top.get
     val port = io(m)
     // firtool puts the memories' $readmemh (SimHarness's image and rays) under ENABLE_INITIAL_MEM_, which its

@@ -40,8 +40,7 @@ object SimSetup {
   /** Where a simulator build's input files go: a short folder named by the digest of the build's key, beside the
     * builds in `work`, so that their absolute names stay far below [[maxFileNameChars]] however long the key. */
   def inputDir(work: java.nio.file.Path, key: String): java.nio.file.Path = {
-    val d = java.security.MessageDigest.getInstance("SHA-256").digest(key.getBytes("UTF-8")).take(6).map(b => f"${b & 0xff}%02x").mkString
-    work.resolve("inputs").resolve(d)
+    work.resolve("inputs").resolve(rtaccel.io.Digest.hexOf(6, key))
   }
   def pow2(n: Long): Int = { var c = 1L; while (c < n) c <<= 1; require(c <= (1 << 30), s"$n entries is too large to simulate"); c.toInt }
   /** The smallest capacities `make simulate` builds (simulator memory only, no hardware's): every frame up to
