@@ -129,7 +129,7 @@ object Throughput {
     val (boxExtra, triExtra) = rtaccel.iu.PipeLatencies.extraOverFixed(p)
     def slices(cached: Boolean) = p.accessSliceCycles + (if (cached) p.cacheSliceCycles else p.passSliceCycles)
     val overhead = nodeOverhead + primOverhead + (boxExtra + slices(s.nodeCache.isDefined)).toDouble * s.nodeAccesses +
-      (triExtra + slices(s.primCache.isDefined)).toDouble * s.leafAccesses
+      (triExtra + p.tuLeafCycles + slices(s.primCache.isDefined)).toDouble * s.leafAccesses
     val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n
     val dram = (s.nodeDramBytes + s.primDramBytes) / bpc / n
     val nodeBeats = s.nodeAccesses * p.nodeAccessBytes / beatBytes / n

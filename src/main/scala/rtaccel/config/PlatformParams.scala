@@ -307,6 +307,9 @@ final case class PlatformParams(
     * the TU's on its answer (the throughput model adds them; cache.Throughput).
     */
   def accessSliceCycles: Int = if (stageBudget.isDefined) 6 else 0
+  /** Cycles PIPELINE adds to each leaf in the TU: its last result is applied a cycle after it arrives, its compare
+    * with tmax registered (tu.TraversalUnit; the throughput model adds it). */
+  def tuLeafCycles: Int = if (stageBudget.isDefined) 1 else 0
   /** Whether the cluster MCs give each path a response buffer: caches reorder DRAM traffic between the paths, and
     * with several clusters or channels the buffers keep one's R beats from waiting on another's (MemoryController).
     */

@@ -159,10 +159,24 @@ class TraversalUnit(p: TuParams) extends Module {
   }
 
   // Leaf: results arrive in slot order; an earlier equal t is kept.
-  when(state === S.waitTri && triIn.valid) {
-    val t = triIn.bits
+  // With PIPELINE a result is applied a cycle after it arrives, with its compare against tmax registered: the compare
+  // then drives one flip-flop, not the enables of tmax and the best record (160 flip-flops; the path after the pop's
+  // on the smallest platform, docs/timing.md). A result compares with the tmax the one before it leaves: that one's
+  // t when it is taken, so back-to-back results keep the order's closest hit (a cycle more per leaf:
+  // PlatformParams.tuLeafCycles).
+  private val (triAt, takeAt) = p.stageBudget match {
+    case None => (triIn, triIn.bits.hit && Fp.lt(f, triIn.bits.t, tmax))
+    case Some(_) =>
+      val b = Wire(Valid(new TriResult(p.pipes)))
+      b.valid := RegNext(triIn.valid, false.B); b.bits := RegNext(triIn.bits)
+      val take = Reg(Bool())
+      take := triIn.bits.hit && Mux(b.valid && take, Fp.lt(f, triIn.bits.t, b.bits.t), Fp.lt(f, triIn.bits.t, tmax))
+      (b, take)
+  }
+  when(state === S.waitTri && triAt.valid) {
+    val t = triAt.bits
     when(t.err) { readError := true.B }
-    when(t.hit && Fp.lt(f, t.t, tmax)) {
+    when(takeAt) {
       tmax := t.t; best.t := t.t; best.prim := t.prim; best.u := t.u; best.v := t.v
     }
     when(t.last) { state := S.pop }

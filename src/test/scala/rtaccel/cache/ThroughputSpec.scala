@@ -34,9 +34,12 @@ class ThroughputSpec extends AnyFunSuite {
     // and each of the 3 accesses six cycles of registers (the IU arbiter's registered grant, the IU's request slice,
     // its slice on the MC's responses and its register in front of the pipes, the MC's slice after its arbiter, the TU's
     // register on its answer); paper2017 has a node cache, so its MC has response buffers and a path slices of its own
-    // (its DRAM read, its beats into and out of the buffer): here no access is cached, three cycles more each
-    val (bx, tx) = rtaccel.iu.PipeLatencies.extraOverFixed(Presets.paper2017)
-    assert(bx > 0 && tx > 0 && Presets.paper2017.accessSliceCycles == 6 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 3)
+    // (its DRAM read, its beats into and out of the buffer): here no access is cached, three cycles more each. The
+    // TU applies a leaf's last result a cycle after it arrives (its registered compare with tmax): one more per leaf
+    val (bx, tx0) = rtaccel.iu.PipeLatencies.extraOverFixed(Presets.paper2017)
+    assert(Presets.paper2017.tuLeafCycles == 1 && p.tuLeafCycles == 0)
+    val tx = tx0 + 1
+    assert(bx > 0 && tx0 > 0 && Presets.paper2017.accessSliceCycles == 6 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 3)
     assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 9)
     // without a cache (one cluster, one channel, request order) and without re-reads (MEM_RETRIES=0) there are no
     // response buffers and no path slice; re-reads need the buffers
