@@ -214,13 +214,14 @@ object Fp {
     // a mask decoded a segment earlier. On 6-input LUTs the mask's register and decode cost more than they save
     // (fp32 mul on xc7 at 6 levels: 406 LUTs against 360), so the OR stays there when pipelined; unpipelined (no
     // register between them) the mask is what ABC maps smaller (mul 396 against 441 LUTs).
-    val stickyByMask = canUnderflow && (pipe.lutInputs < Depth.LutInputs || pipe.budget.isEmpty)
+    val lut4 = pipe.lutInputs < Depth.LutInputs
+    val stickyByMask = canUnderflow && (lut4 || pipe.budget.isEmpty)
     // 1b: the left shift, the leading zeros saturated at the room (its own segment: after a wide count, the compare
     // and its mux were the deepest step of a wide significand, WatertightPipe's routed critical path on ECP5). On
     // 4-input LUTs the compare of the count with the room takes a level more than a carry chain's estimate, so the
     // Stager cuts it from the shift after it: together they were TriPipe's routed critical path on ECP5 at seeds 1
     // and 2 (the registered room -> the saturated count -> the shifter's selects -> the significand register)
-    val mid = pipe.step(lzd, Depth.carry(lzd.v.slW) + 1 + (if (pipe.lutInputs < Depth.LutInputs) 1 else 0)) { r =>
+    val mid = pipe.step(lzd, Depth.carry(lzd.v.slW) + 1 + (if (lut4) 1 else 0)) { r =>
       val o = Wire(new NormMid(n, w, r.slW, r.rW, if (stickyByMask) j else 0))
       o.sign := r.sign; o.exp := r.exp; o.sig := r.sig; o.sl := Mux(r.sl < r.room, r.sl, r.room); o.rSat := r.rSat
       o.leftCase := r.leftCase; o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
