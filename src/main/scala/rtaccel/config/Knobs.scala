@@ -185,6 +185,10 @@ object Knobs {
       why = "triangle arithmetic narrower than fp32 is not conservative (it loses hits)").echoes(numerics)
       .reads(at("FORMATS.TRI_FP")(p => flag(p.triFormat != rtaccel.fp.FpFormat.fp32)), at("FORMATS2.TRI_EXP_BITS")(_.triFormat.expBits),
         at("FORMATS2.TRI_MAN_BITS")(_.triFormat.manBits)),
+    Knob("TRI_II", "tri-ii", "cycles between two primitives at least (the triangle pipe's initiation interval): k > 1 shares each of " +
+      "Moller-Trumbore's operators among k operations of a primitive, about 1/k of its multipliers and adders, the same results",
+      Ints(1, PlatformParams.MaxTriInterval), shapes = true, Use.platform, cal("1")(_.triInterval.toString))
+      .echoes("tri_ii")(_.triInterval).reads(at("FORMATS2.TRI_II")(_.triInterval)),
     Knob("NODE_FORMAT", "node-format", "node layout: full (6 fp32 planes per child), q<bits> (quantized planes, docs/numerics.md) or fit (the narrowest the scene needs)",
       AnyOf(Names(Seq("full", "fit")), Template(Seq(("q", 2, 16)))), shapes = true, Use.tree, cal("full")(p => Numerics.nodeFormatName(p.nodeQuantBits))).echoes(numerics)
       .reads(at("FORMATS2.NODE_QUANT_BITS")(_.nodeQuantBits), at("FORMATS.NODE_BYTES_LOG2")(p => log2(p.nodeSlotBytes))),

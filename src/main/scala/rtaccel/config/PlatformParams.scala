@@ -137,6 +137,9 @@ final case class PlatformParams(
   nodeQuantBits: Int = 0, // NODE_FORMAT: 0 = full fp32 planes, k = q<k> quantized planes (bvh.Quantize, bvh.QNodeLayout)
   primPacked: Boolean = false, // PRIM_FORMAT=packed: a leaf's triangles back to back, beat-aligned per leaf (docs/numerics.md)
   triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, // TRI_FORMAT: Möller–Trumbore's arithmetic, fp32 or wider (Numerics)
+  // TRI_II=k: the triangle pipe takes a primitive every k cycles at most and shares each of its operators among k
+  // operations of a primitive (iu.TriPipe, fp.Fold): about 1/k of the multipliers and adders, the same results
+  triInterval: Int = 1,
   ius: Int = 1, // IUS: intersection units, each with its own MC and caches and TUS / IUS TUs (docs/platform.md, "IU clusters")
   memChannels: Int = 1, // MEM_CHANNELS: address-interleaved DRAM channels, each an AXI4 master with MEM_GBPS of its own
   // RESP_ORDER=path: the MC answers node and primitive requests in two streams, each in its own path's order, so a
@@ -179,6 +182,9 @@ final case class PlatformParams(
     s"TRI_FORMAT=${triFormat.name} is narrower than fp32; use fp32, fp64 or e<E>m<M> with E >= 8 and M >= 23")
   require(triFormat == rtaccel.fp.FpFormat.fp32 || triTest == TriTest.Mt,
     s"TRI_FORMAT=${triFormat.name} widens Möller–Trumbore only; TRI_TEST=watertight takes TRI_FORMAT=fp32 (its edge signs are exact already)")
+  require(triInterval >= 1 && triInterval <= PlatformParams.MaxTriInterval, s"TRI_II must be 1..${PlatformParams.MaxTriInterval} cycles (got $triInterval)")
+  require(triInterval == 1 || triTest == TriTest.Mt,
+    s"TRI_II=$triInterval shares Möller–Trumbore's operators; TRI_TEST=watertight takes TRI_II=1")
   require(nodeQuantBits == 0 || (nodeQuantBits >= 2 && nodeQuantBits <= 16),
     s"NODE_FORMAT=q$nodeQuantBits: a quantized plane takes 2..16 bits (the 16-bit field of the node layout)")
   require(rtaccel.fp.FpFormat.fp32.holds(boxFormat),
@@ -231,6 +237,12 @@ final case class PlatformParams(
   /** A primitive is 9 floats (288 bits); its 64-byte slot also carries the original triangle id. */
   val primBits: Int = 9 * 32
   val primStrideBytes: Int = 64
+  // the IU's collection hands the pipe a primitive once all its beats are in: one per primStrideBytes / beat cycles
+  // at most (packed leaves' records span beats unevenly: no such bound)
+  require(triInterval == 1 || (!primPacked && primStrideBytes * 8 / axiDataBits >= triInterval),
+    s"TRI_II=$triInterval needs a primitive to take at least $triInterval memory beats (it takes " +
+      (if (primPacked) "fewer with PRIM_FORMAT=packed" else s"${math.max(1, primStrideBytes * 8 / axiDataBits)} at a $axiDataBits-bit bus") +
+      s"); use TRI_II=${if (primPacked) 1 else math.max(1, primStrideBytes * 8 / axiDataBits)}" + (if (primPacked) " or PRIM_FORMAT=slot64" else ""))
   /** Bytes a node occupies in NODE_FORMAT: the full node's slot, or the quantized node (bvh.Quantize) rounded up to
     * a power of two (M=4, q8: 64 B). The stride of the node array in memory, the node fetch's beats and a node
     * cache line of the RTL.
@@ -333,7 +345,7 @@ final case class PlatformParams(
   /** The view the IU's arithmetic pipes take: only what shapes them. */
   lazy val pipes: rtaccel.iu.PipeParams = rtaccel.iu.PipeParams(m, tuBits, boxFormat, boxSlackUlps, triTest, triFormat, divStages,
     stageBudget, stageBudget.map(_ => dspShape), stageBudget.flatMap(_ => delayRamCycles),
-    stageBudget.fold(rtaccel.fp.Depth.LutInputs)(_ => rtaccel.area.Timing.forFamily(family).lutInputs))
+    stageBudget.fold(rtaccel.fp.Depth.LutInputs)(_ => rtaccel.area.Timing.forFamily(family).lutInputs), triInterval)
   /** The view a node's way into the box pipe takes (iu.NodeJob, iu.NodeDecode). */
   lazy val nodes: rtaccel.iu.NodeParams = rtaccel.iu.NodeParams(pipes, nodeQuantBits, nodeSlotBytes)
   /** The view a traversal unit takes (tu.TraversalUnit and its stacks). */
@@ -361,4 +373,7 @@ object PlatformParams {
   /** MEM_RETRIES' largest value: the register map's field (FORMATS2.MEM_RETRIES) has two bits. A transient error
     * clears on the first re-read; more re-reads only delay the flag of an error that stays. */
   val MaxMemRetries = 3
+  /** TRI_II's largest value: the register map's field (FORMATS2.TRI_II) has three bits; a slot64 primitive is four
+    * beats of a 128-bit bus. */
+  val MaxTriInterval = 4
 }

@@ -90,11 +90,17 @@ final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, 
   def valid(v: Bool, at: Int): Bool = { count(v, at); ShiftRegister(v, at, false.B, true.B) }
 
   /** One segment of `levels` LUT levels: a register goes in front of it when the path would pass the budget. */
-  def step[A <: Data, B <: Data](x: Timed[A], levels: Int)(fn: A => B): Timed[B] = {
+  def step[A <: Data, B <: Data](x: Timed[A], levels: Int)(fn: A => B): Timed[B] = stepAt(x, levels)((v, _) => fn(v))
+
+  /** [[step]] whose `fn` also takes the cycle it runs in (after the register in front of it, if one goes there). */
+  def stepAt[A <: Data, B <: Data](x: Timed[A], levels: Int)(fn: (A, Int) => B): Timed[B] = {
     val cut = budget.exists(b => x.depth > 0 && x.depth + levels > b)
     val y = if (cut) { count(x.v, 1); Timed(RegNext(x.v), x.at + 1, 0) } else x
-    Timed(fn(y.v), y.at, y.depth + levels)
+    Timed(fn(y.v, y.at), y.at, y.depth + levels)
   }
+
+  /** x loaded into a register when `en` (a value held between loads: [[Fold]]), counted in the census. */
+  def hold[T <: Data](x: T, en: Bool): T = { count(x, 1); RegEnable(x, en) }
 
   /** `fn` of several inputs read at the same cycle, as one segment of `levels`. */
   def op[B <: Data](xs: Seq[Timed[UInt]], levels: Int)(fn: Seq[UInt] => B): Timed[B] = {

@@ -28,11 +28,12 @@ object PipeLatencies {
     })
   }
 
-  /** Cycles PIPELINE adds to a node test and to a leaf's triangle tests over the fixed stages (0, 0 at none): what the
-    * throughput model (cache.Throughput), calibrated at the fixed stages, adds to a ray's latency.
+  /** Cycles PIPELINE (and TRI_II's shared operators) add to a node test and to a leaf's triangle tests over the fixed
+    * stages of a primitive per cycle (0, 0 at none and TRI_II=1): what the throughput model (cache.Throughput),
+    * calibrated there, adds to a ray's latency.
     */
-  def extraOverFixed(p: PlatformParams): (Int, Int) = if (p.stageBudget.isEmpty) (0, 0) else {
-    val l = of(p); val f = of(p.copy(pipelining = rtaccel.config.Pipelining.Fixed))
+  def extraOverFixed(p: PlatformParams): (Int, Int) = if (p.stageBudget.isEmpty && p.triInterval == 1) (0, 0) else {
+    val l = of(p); val f = of(p.copy(pipelining = rtaccel.config.Pipelining.Fixed, triInterval = 1))
     (l.box - f.box, l.tri - f.tri)
   }
 

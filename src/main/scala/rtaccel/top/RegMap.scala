@@ -26,7 +26,7 @@ object RegMap {
 
   /** Bumped whenever the map changes incompatibly (major) or grows (minor). */
   val VersionMajor = 2
-  val VersionMinor = 9
+  val VersionMinor = 10
   val Magic: Long = 0x52544143L // "RTAC"
 
   val Id = Reg("ID", 0x000, RO, "magic 0x52544143 ('RTAC')")
@@ -52,6 +52,7 @@ object RegMap {
     Field("PRIM_PACKED", 31, 1, "1 = PRIM_FORMAT=packed: 40 B records back to back, a leaf per row of ceil(MPPL x 40 / beat) beats (PRIM_BYTES_LOG2 does not apply)")))
   val Formats2 = Reg("FORMATS2", 0x01C, RO, "memory layouts and the triangle format (FORMATS has no room left)", Seq(
     Field("NODE_QUANT_BITS", 0, 5, "0 = full fp32 nodes, k = NODE_FORMAT=q<k> quantized nodes (docs/numerics.md)"),
+    Field("TRI_II", 5, 3, "TRI_II: cycles between two primitives at least, over which the triangle pipe shares its operators (1: a primitive per cycle)"),
     Field("TRI_EXP_BITS", 8, 4, "exponent bits of Möller–Trumbore's format (8 for fp32)"),
     Field("TRI_MAN_BITS", 12, 6, "fraction bits of Möller–Trumbore's format (23 for fp32)"),
     Field("RESP_ORDER", 18, 1, "0 = the MC answers in request order (the paper's), 1 = RESP_ORDER=path or tagged: node and primitive responses each in their own order"),

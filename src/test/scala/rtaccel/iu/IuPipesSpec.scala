@@ -121,8 +121,10 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
   private type TriPorts = Bundle { val in: Valid[TriJob]; val out: Valid[TriResult] }
   private def triPipeTest[T <: Module](name: String, n: Int, pipe: => T, latency: T => Int, io: T => TriPorts,
                                       model: (PreparedRay, Float, Array[Float], RayTriangle.Result) => Boolean, ties: Boolean,
-                                      wide: Boolean = false, build: rtaccel.sim.VerilatorBuild = rtaccel.sim.VerilatorBuild.quick): Unit =
-    test(s"$name == its model on $n random and degenerate primitives, one per cycle") {
+                                      wide: Boolean = false, build: rtaccel.sim.VerilatorBuild = rtaccel.sim.VerilatorBuild.quick,
+                                      interval: Int = 1): Unit =
+    test(s"$name == its model on $n random and degenerate primitives, " +
+      (if (interval == 1) "one per cycle" else s"$interval or ${interval + 1} cycles apart, other words between them")) {
       val built = rtaccel.TestSim.firtool(s"IuPipesSpec/${name.filter(_.isLetterOrDigit)}", build)(pipe)(io)
       test(built.gen()).withAnnotations(built.annotations) { dut =>
         val (in, outIo) = (dut.io.in, dut.io.out)
@@ -131,8 +133,10 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
         val expected = scala.collection.mutable.Queue[(Boolean, Seq[BigInt], Boolean)]()
         val out = new RayTriangle.Result
         var hits = 0; var tieJobs = 0
-        for (cycle <- 0 until n + lat) {
-          if (cycle < n) {
+        // TRI_II=k: a job every k or k + 1 cycles (no fixed phase), the inputs changing between jobs
+        val issued = (1 until n).scanLeft(0)((c, _) => c + interval + (if (interval > 1) rnd.nextInt(2) else 0)).toSet
+        for (cycle <- 0 until issued.max + 1 + lat) {
+          if (issued(cycle)) {
             val tie = ties && rnd.nextInt(4) == 0
             val (rf, r, tmax) = if (tie) zRay() else ray()
             val v = if (tie) { tieJobs += 1; nearTie() } else Array.fill(9)((rnd.nextFloat() - 0.5f) * 3)
@@ -159,8 +163,11 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
             val hit = cycle % 97 != 5 && model(r, tmax, v, out)
             if (hit) hits += 1
             expected.enqueue((hit, Seq(bits(out.t), bits(out.u), bits(out.v)), cycle % 3 == 0))
-          } else in.valid.poke(false.B)
-          if (cycle >= lat) {
+          } else {
+            in.valid.poke(false.B)
+            for (k <- 0 until 10) in.bits.words(k).poke(BigInt(32, rnd).U)
+          }
+          if (issued(cycle - lat)) {
             outIo.valid.expect(true.B)
             val (hit, tuv, last) = expected.dequeue()
             outIo.bits.hit.expect(hit.B, s"cycle $cycle")
@@ -180,6 +187,13 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
 
   triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=auto)", randoms, new TriPipe(p.pipes), _.latency, _.io,
     (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
+  // TRI_II=k: the operators shared by k operations of a primitive (fp.Fold), the same results at every depth; k > 2
+  // needs a primitive of k beats or more (a 128-bit bus)
+  for ((k, pl, jobs) <- Seq((2, auto, 3000)) ++ (if (regress) Seq((2, fixed, 5000), (3, deep, 5000), (4, auto, 5000)) else Seq((3, fixed, 1500)))) {
+    val pk = p.copy(triInterval = k, axiDataBits = if (k > 2) 128 else p.axiDataBits, pipelining = pl)
+    triPipeTest[TriPipe](s"Möller–Trumbore pipe at TRI_II=$k, PIPELINE=${pl.name}", jobs, new TriPipe(pk.pipes), _.latency, _.io,
+      (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false, interval = k)
+  }
   private val watertight = new rtaccel.model.RayTriangleWatertight
   for (pl <- Seq(deep) ++ (if (regress) Seq(auto, fixed) else Nil)) {
     val pp = p.copy(pipelining = pl)
