@@ -66,7 +66,7 @@ object Cli {
       boxFormat = a.opt("box-format").filter(BoxRange.fitRequest(_).isEmpty).map(rtaccel.fp.FpFormat.parse).getOrElse(base.boxFormat),
       triTest = a.opt("tri-test").map(TriTest.parse).getOrElse(base.triTest),
       triFormat = a.opt("tri-format").map(Numerics.parseTriFormat).getOrElse(base.triFormat),
-      triInterval = a.int("tri-ii", base.triInterval),
+      triInterval = a.int("tri-ii", base.triInterval), boxInterval = a.int("box-ii", base.boxInterval),
       // fit: the narrowest quantization the scene needs, chosen in build()
       nodeQuantBits = a.opt("node-format").filter(_ != "fit").map(Numerics.parseNodeFormat).getOrElse(base.nodeQuantBits),
       primPacked = a.opt("prim-format").map(Numerics.parsePrimFormat).getOrElse(base.primPacked),

@@ -188,7 +188,11 @@ object Knobs {
     Knob("TRI_II", "tri-ii", "cycles between two primitives at least (the triangle pipe's initiation interval): k > 1 shares each of " +
       "Moller-Trumbore's operators among k operations of a primitive, about 1/k of its multipliers and adders, the same results",
       Ints(1, PlatformParams.MaxTriInterval), shapes = true, Use.platform, cal("1")(_.triInterval.toString))
-      .echoes("tri_ii")(_.triInterval).reads(at("FORMATS2.TRI_II")(_.triInterval)),
+      .echoes("tri_ii")(_.triInterval).reads(at("INTERVALS.TRI_II")(_.triInterval)),
+    Knob("BOX_II", "box-ii", "cycles between two nodes at least (the box pipe's initiation interval): k > 1 shares each of the slab test's " +
+      "subtractors and multipliers among k planes of a node, about 1/k of them, the same results",
+      Ints(1, PlatformParams.MaxBoxInterval), shapes = true, Use.platform, cal("1")(_.boxInterval.toString))
+      .echoes("box_ii")(_.boxInterval).reads(at("INTERVALS.BOX_II")(_.boxInterval)),
     Knob("NODE_FORMAT", "node-format", "node layout: full (6 fp32 planes per child), q<bits> (quantized planes, docs/numerics.md) or fit (the narrowest the scene needs)",
       AnyOf(Names(Seq("full", "fit")), Template(Seq(("q", 2, 16)))), shapes = true, Use.tree, cal("full")(p => Numerics.nodeFormatName(p.nodeQuantBits))).echoes(numerics)
       .reads(at("FORMATS2.NODE_QUANT_BITS")(_.nodeQuantBits), at("FORMATS.NODE_BYTES_LOG2")(p => log2(p.nodeSlotBytes))),

@@ -140,6 +140,9 @@ final case class PlatformParams(
   // TRI_II=k: the triangle pipe takes a primitive every k cycles at most and shares each of its operators among k
   // operations of a primitive (iu.TriPipe, fp.Fold): about 1/k of the multipliers and adders, the same results
   triInterval: Int = 1,
+  // BOX_II=k: the box pipe takes a node every k cycles at most and shares each subtractor and multiplier among k
+  // planes of a node (iu.BoxPipe, fp.Fold)
+  boxInterval: Int = 1,
   ius: Int = 1, // IUS: intersection units, each with its own MC and caches and TUS / IUS TUs (docs/platform.md, "IU clusters")
   memChannels: Int = 1, // MEM_CHANNELS: address-interleaved DRAM channels, each an AXI4 master with MEM_GBPS of its own
   // RESP_ORDER=path: the MC answers node and primitive requests in two streams, each in its own path's order, so a
@@ -183,6 +186,7 @@ final case class PlatformParams(
   require(triFormat == rtaccel.fp.FpFormat.fp32 || triTest == TriTest.Mt,
     s"TRI_FORMAT=${triFormat.name} widens Möller–Trumbore only; TRI_TEST=watertight takes TRI_FORMAT=fp32 (its edge signs are exact already)")
   require(triInterval >= 1 && triInterval <= PlatformParams.MaxTriInterval, s"TRI_II must be 1..${PlatformParams.MaxTriInterval} cycles (got $triInterval)")
+  require(boxInterval >= 1 && boxInterval <= PlatformParams.MaxBoxInterval, s"BOX_II must be 1..${PlatformParams.MaxBoxInterval} cycles (got $boxInterval)")
   require(triInterval == 1 || triTest == TriTest.Mt,
     s"TRI_II=$triInterval shares Möller–Trumbore's operators; TRI_TEST=watertight takes TRI_II=1")
   require(nodeQuantBits == 0 || (nodeQuantBits >= 2 && nodeQuantBits <= 16),
@@ -249,6 +253,10 @@ final case class PlatformParams(
     */
   val nodeSlotBytes: Int = if (nodeQuantBits == 0) nodeStrideBytes
     else Integer.highestOneBit(math.max(1, (rtaccel.bvh.Quantize.nodeBits(m, nodeQuantBits) + 7) / 8 - 1)) << 1
+  // the IU's collection hands the box pipe a node once all its beats are in: one per nodeSlotBytes / beat cycles at most
+  private def nodeBeats = math.max(1, nodeSlotBytes * 8 / axiDataBits)
+  require(boxInterval <= nodeBeats, s"BOX_II=$boxInterval needs a node to take at least $boxInterval memory beats (it takes $nodeBeats: " +
+    s"M=$m, ${if (nodeQuantBits == 0) "full" else s"q$nodeQuantBits"} nodes of $nodeSlotBytes B on a $axiDataBits-bit bus); use BOX_II=$nodeBeats or less")
   /** DRAM bytes of a leaf of `count` primitives: count 64 B slots, or with PRIM_FORMAT=packed the 40 B records
     * (9 floats + id) back to back, rounded up to whole memory beats per leaf (M=4 MPPL=4 on 256-bit beats: 160 B).
     */
@@ -345,7 +353,7 @@ final case class PlatformParams(
   /** The view the IU's arithmetic pipes take: only what shapes them. */
   lazy val pipes: rtaccel.iu.PipeParams = rtaccel.iu.PipeParams(m, tuBits, boxFormat, boxSlackUlps, triTest, triFormat, divStages,
     stageBudget, stageBudget.map(_ => dspShape), stageBudget.flatMap(_ => delayRamCycles),
-    stageBudget.fold(rtaccel.fp.Depth.LutInputs)(_ => rtaccel.area.Timing.forFamily(family).lutInputs), triInterval)
+    stageBudget.fold(rtaccel.fp.Depth.LutInputs)(_ => rtaccel.area.Timing.forFamily(family).lutInputs), triInterval, boxInterval)
   /** The view a node's way into the box pipe takes (iu.NodeJob, iu.NodeDecode). */
   lazy val nodes: rtaccel.iu.NodeParams = rtaccel.iu.NodeParams(pipes, nodeQuantBits, nodeSlotBytes)
   /** The view a traversal unit takes (tu.TraversalUnit and its stacks). */
@@ -376,4 +384,6 @@ object PlatformParams {
   /** TRI_II's largest value: the register map's field (FORMATS2.TRI_II) has three bits; a slot64 primitive is four
     * beats of a 128-bit bus. */
   val MaxTriInterval = 4
+  /** BOX_II's largest value: an M=8 node of fp32 planes is eight beats of a 256-bit bus. */
+  val MaxBoxInterval = 8
 }

@@ -38,14 +38,20 @@ class BoxPipe(p: PipeParams) extends Module {
   private def stage[T <: Data](x: Timed[T]): Timed[T] = pipe.reg(x)
   private def at[T <: Data](x: Timed[T], t: Int): T = pipe.delayTo(x, t).v
 
-  private val job = pipe.in(io.in.bits, BoxPipe.inputDepth)
+  // BOX_II=k: a node every k cycles at most, each subtractor and multiplier shared by k planes of a node (fp.Fold);
+  // the input is then held in a register loaded on valid, so that every value of the node stays put for k cycles
+  private val ii = p.boxInterval
+  private val fold = new rtaccel.fp.Fold(pipe, ii, io.in.valid)
+  private val job = if (ii == 1) pipe.in(io.in.bits, BoxPipe.inputDepth) else Timed(pipe.hold(io.in.bits, io.in.valid), 1, 0)
   private def word(k: Int) = job.map(0)(_.words(k))
   private def o(a: Int) = job.map(0)(_.ray.o(a))
   private def inv(a: Int) = job.map(0)(_.ray.inv(a))
+  private def each(ops: Seq[Seq[Timed[UInt]]])(fn: Seq[Timed[UInt]] => Timed[UInt]) = fold.batch(ops)(fn)
   // per child: t0 x/y/z of the min planes, then t1 of the max planes (stage 2), as the model's RayBox(Reduced)
   private val (t01, tminB, tmaxB) = if (bf == f) {
-    val ab = Seq.tabulate(p.m, 6) { (c, k) => stage(Fp.subT(pipe, f, word(7 * c + k), o(k % 3))) }.flatten
-    (ab.zipWithIndex.map { case (x, i) => stage(Fp.mulT(pipe, f, x, inv(i % 3))) }, job.map(0)(_.ray.tmin), job.map(0)(_.tmax))
+    val ab = each(Seq.tabulate(p.m, 6)((c, k) => Seq(word(7 * c + k), o(k % 3))).flatten)(x => stage(Fp.subT(pipe, f, x(0), x(1))))
+    (each(ab.zipWithIndex.map { case (x, i) => Seq(x, inv(i % 3)) })(x => stage(Fp.mulT(pipe, f, x(0), x(1)))),
+      job.map(0)(_.ray.tmin), job.map(0)(_.tmax))
   } else outward()
 
   /** The conservative slab test in the narrower format (docs/numerics.md): min planes' distances rounded
@@ -54,14 +60,18 @@ class BoxPipe(p: PipeParams) extends Module {
     */
   private def outward(): (Seq[Timed[UInt]], Timed[UInt], Timed[UInt]) = {
     def const(b: Boolean) = Timed(b.B, 0, 0)
-    val ab = Seq.tabulate(p.m, 6) { (c, k) =>
+    // (with BOX_II > 1 a shared operator rounds either way: its direction is an operand, selected with the planes)
+    def dir(x: Timed[UInt]) = x.map(0)(_(0))
+    val ab = if (ii == 1) Seq.tabulate(p.m, 6) { (c, k) =>
       stage(Fp.subDirectedT(pipe, f, bf, word(7 * c + k), o(k % 3), const(k >= 3))) }.flatten
+    else each(Seq.tabulate(p.m, 6)((c, k) => Seq(word(7 * c + k), o(k % 3), Timed((k >= 3).B.asUInt, 0, 0))).flatten)(x =>
+      stage(Fp.subDirectedT(pipe, f, bf, x(0), x(1), dir(x(2)))))
     val invLo = Seq.tabulate(3)(a => stage(Fp.convertT(pipe, f, bf, inv(a), const(false))))
     val invHi = Seq.tabulate(3)(a => stage(Fp.convertT(pipe, f, bf, inv(a), const(true))))
     val tmin1 = stage(Fp.convertT(pipe, f, bf, job.map(0)(_.ray.tmin), const(false)))
     val tmax1 = stage(Fp.convertT(pipe, f, bf, job.map(0)(_.tmax), const(true)))
     val invSign = (0 until 3).map(a => inv(a).map(0)(_(f.width - 1))) // only the sign of 1/d is needed past stage 1
-    val t = Seq.tabulate(p.m, 6) { (c, k) =>
+    val ops = Seq.tabulate(p.m, 6) { (c, k) =>
       val a = k % 3
       val d = ab(6 * c + k)
       // a min plane bounds the entry (down) unless 1/d < 0 swaps the planes; 1/d taken at the bound that keeps the
@@ -72,8 +82,9 @@ class BoxPipe(p: PipeParams) extends Module {
       val up = if (k < 3) invNeg else !invNeg
       val useHi = dd.v(bf.width - 1) ^ up
       val pick = Timed(Mux(useHi, hi.v, lo.v), dd.at, Seq(lo, hi, dd, iv).map(_.depth).max + 1)
-      stage(Fp.mulDirectedT(pipe, bf, dd, pick, Timed(up, dd.at, iv.depth)))
+      Seq(dd, pick, Timed(up.asUInt, dd.at, iv.depth))
     }.flatten
+    val t = each(ops)(x => stage(Fp.mulDirectedT(pipe, bf, x(0), x(1), dir(x(2)))))
     (t, tmin1, tmax1)
   }
 
@@ -138,6 +149,10 @@ class BoxPipe(p: PipeParams) extends Module {
   val latency: Int = out.at
   io.out.bits := out.v
   io.out.valid := pipe.valid(io.in.valid, latency)
+  if (ii > 1) { // the IU delivers a node every k cycles at most (PlatformParams checks its beats per node)
+    val recent = (1 until ii).map(fold.at(_)).reduce(_ || _)
+    when(io.in.valid) { assert(!recent, s"BoxPipe: nodes closer than BOX_II=$ii cycles") }
+  }
   /** Its pipeline registers, its divider's included (a census for the cost model). */
   val census: rtaccel.fp.Stager.Census = pipe.census
 }

@@ -10,7 +10,7 @@ import rtaccel.fp.{DspShape, FpFormat, Stager}
   */
 final case class PipeParams(m: Int, tuBits: Int, boxFormat: FpFormat, boxSlackUlps: Int, triTest: TriTest, triFormat: FpFormat,
                             divStages: Int, stageBudget: Option[Int], dspShape: Option[DspShape], delayRamCycles: Option[Int],
-                            lutInputs: Int, triInterval: Int = 1) {
+                            lutInputs: Int, triInterval: Int = 1, boxInterval: Int = 1) {
   /** A register placer for one module's datapath at this budget (each module takes its own). */
   def pipe: Stager = stageBudget.fold(new Stager(None))(b => new Stager(Some(b), dspShape.get, delayRamCycles, lutInputs))
 }

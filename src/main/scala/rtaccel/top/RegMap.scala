@@ -52,7 +52,6 @@ object RegMap {
     Field("PRIM_PACKED", 31, 1, "1 = PRIM_FORMAT=packed: 40 B records back to back, a leaf per row of ceil(MPPL x 40 / beat) beats (PRIM_BYTES_LOG2 does not apply)")))
   val Formats2 = Reg("FORMATS2", 0x01C, RO, "memory layouts and the triangle format (FORMATS has no room left)", Seq(
     Field("NODE_QUANT_BITS", 0, 5, "0 = full fp32 nodes, k = NODE_FORMAT=q<k> quantized nodes (docs/numerics.md)"),
-    Field("TRI_II", 5, 3, "TRI_II: cycles between two primitives at least, over which the triangle pipe shares its operators (1: a primitive per cycle)"),
     Field("TRI_EXP_BITS", 8, 4, "exponent bits of Möller–Trumbore's format (8 for fp32)"),
     Field("TRI_MAN_BITS", 12, 6, "fraction bits of Möller–Trumbore's format (23 for fp32)"),
     Field("RESP_ORDER", 18, 1, "0 = the MC answers in request order (the paper's), 1 = RESP_ORDER=path or tagged: node and primitive responses each in their own order"),
@@ -88,6 +87,10 @@ object RegMap {
     Field("TRI_LATENCY", 16, 8, "cycles of the triangle test pipe of TRI_TEST (255: 255 or more)"),
     Field("PREP_LATENCY", 24, 8, "cycles of the TC's ray preparation, 1/d (255: 255 or more)")))
 
+  val Intervals = Reg("INTERVALS", 0x050, RO, "initiation intervals of the IU's pipes: cycles between two jobs at least, over which each pipe shares its operators (docs/platform.md)", Seq(
+    Field("TRI_II", 0, 4, "TRI_II: the triangle pipe takes a primitive every TRI_II cycles (1: one per cycle)"),
+    Field("BOX_II", 4, 4, "BOX_II: the box pipe takes a node every BOX_II cycles (1: one per cycle)")))
+
   val MaxSteps = Reg("MAX_STEPS", 0x04C, RW, "fetches (node or leaf) a ray may make; a ray that needs more ends flagged, " +
     "prim -4 (0 = no limit; reset: the generator's MAX_STEPS, by default a bound no ray of an uncorrupted image reaches). " +
     "Each ray reads it as it starts: write it between batches", Seq(Field("VALUE", 0, 32, "the low hw.stepBits bits are kept (32 by default)")))
@@ -100,7 +103,7 @@ object RegMap {
   }
 
   val fixed: Seq[Reg] = Seq(Id, Version, Config0, Config1, NodeCache, PrimCache, Formats, Formats2, Control, Status, IrqEnable,
-    IrqStatus, MaxLevel, RayCount, PrimBaseLo, PrimBaseHi, HitsDone, RaysIn, Pipeline, MaxSteps)
+    IrqStatus, MaxLevel, RayCount, PrimBaseLo, PrimBaseHi, HitsDone, RaysIn, Pipeline, MaxSteps, Intervals)
   def all(counterNames: Seq[String]): Seq[Reg] = fixed ++ counterRegs(counterNames)
   /** Address bits of the AXI4-Lite port: the map with every counter fits. */
   def addrBits(counterNames: Seq[String]): Int = {

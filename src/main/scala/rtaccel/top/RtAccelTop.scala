@@ -62,7 +62,7 @@ object RtAccelTop {
     }
   }
   /** The read-only registers that describe the circuit, in the order the host reads them. */
-  val configRegs: Seq[RegMap.Reg] = Seq(RegMap.Config0, RegMap.Config1, RegMap.NodeCache, RegMap.PrimCache, RegMap.Formats, RegMap.Formats2, RegMap.Pipeline)
+  val configRegs: Seq[RegMap.Reg] = Seq(RegMap.Config0, RegMap.Config1, RegMap.NodeCache, RegMap.PrimCache, RegMap.Formats, RegMap.Formats2, RegMap.Pipeline, RegMap.Intervals)
 }
 
 /** Board top (paper Fig 1, with the PCIe communication controller replaced by AXI4-Stream): rays in, hits

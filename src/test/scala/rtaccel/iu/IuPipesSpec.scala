@@ -54,19 +54,26 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
     (if (regress) Seq((FpFormat(4, 7), TriTest.Mt, 1500, auto), // what BOX_FORMAT=m7 fits to a unit-scale scene: a 4-bit exponent that overflows
       (FpFormat.fp32, TriTest.Watertight, 5000, deep), (FpFormat.parse("fp16"), TriTest.Mt, 6000, auto), (FpFormat.parse("fp24"), TriTest.Mt, 6000, deep),
       (FpFormat.parse("bf16"), TriTest.Watertight, 6000, auto), (FpFormat.fp32, TriTest.Mt, 5000, fixed), (FpFormat.parse("bf16"), TriTest.Mt, 3000, fixed)) else Nil)
-  for ((bf, tt, n, pl) <- boxFormats)
-  test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}, PIPELINE=${pl.name}) == ${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), one per cycle") {
-    val pb = p.copy(boxFormat = bf, triTest = tt, pipelining = pl)
+  // BOX_II=k: the subtractors and multipliers shared by k planes of a node (fp.Fold), a node every k or k + 1 cycles
+  // with other words between them (make test: 2 at fp32 and auto, 4 at bf16 and none; make regress: 3 at the deep budget)
+  private val boxIntervals = Seq((2, FpFormat.fp32, TriTest.Mt, 2000, auto), (4, FpFormat.parse("bf16"), TriTest.Mt, 1500, fixed)) ++
+    (if (regress) Seq((3, FpFormat.fp32, TriTest.Watertight, 3000, deep)) else Nil)
+  for ((ii, bf, tt, n, pl) <- boxFormats.map { case (b, t, n, l) => (1, b, t, n, l) } ++ boxIntervals)
+  test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}, PIPELINE=${pl.name}${if (ii > 1) s", BOX_II=$ii" else ""}) == " +
+    s"${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), " + (if (ii == 1) "one per cycle" else s"$ii or ${ii + 1} cycles apart")) {
+    val pb = p.copy(boxFormat = bf, triTest = tt, pipelining = pl, boxInterval = ii)
     val outward = if (bf == FpFormat.fp32) None else Some(new RayBoxOutward(bf, pb.boxSlackUlps))
-    val box = rtaccel.TestSim.firtool(s"IuPipesSpec/box-${bf.name}-${tt.name}-${pl.name}")(new BoxPipe(pb.pipes))(_.io)
+    val box = rtaccel.TestSim.firtool(s"IuPipesSpec/box-${bf.name}-${tt.name}-${pl.name}-ii$ii")(new BoxPipe(pb.pipes))(_.io)
     test(box.gen()).withAnnotations(box.annotations) { dut =>
       val lat = box.module.latency
-      if (pl == fixed) assert(lat == 4, s"PIPELINE=none keeps the four stages (latency $lat)")
+      if (pl == fixed && ii == 1) assert(lat == 4, s"PIPELINE=none keeps the four stages (latency $lat)")
       else assert(lat > 4, s"PIPELINE=${pl.name} adds registers (latency $lat)")
       info(s"latency $lat cycles")
       val expected = scala.collection.mutable.Queue[(Seq[Boolean], Seq[BigInt])]()
-      for (cycle <- 0 until n + lat) {
-        if (cycle < n) {
+      val issued = (1 until n).scanLeft(0)((c, _) => c + ii + (if (ii > 1) rnd.nextInt(2) else 0)).toSet
+      for (cycle <- 0 until issued.max + 1 + lat) {
+        if (!issued(cycle)) for (i <- 0 until 7 * p.m) dut.io.in.bits.words(i).poke(BigInt(32, rnd).U)
+        if (issued(cycle)) {
           val (rf, r, tmax) = ray()
           val words = (0 until p.m).flatMap { c =>
             val a = Array.fill(3)(coord()); val b = Array.fill(3)(coord())
@@ -84,8 +91,8 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
           }
           expected.enqueue((res.map(_._1), res.map(_._2)))
         } else dut.io.in.valid.poke(false.B)
-        if (cycle >= lat) {
-          dut.io.out.valid.expect(true.B)
+        dut.io.out.valid.expect(issued(cycle - lat).B)
+        if (issued(cycle - lat)) {
           val (hit, tn) = expected.dequeue()
           for (c <- 0 until p.m) {
             dut.io.out.bits.hit(c).expect(hit(c).B, s"cycle $cycle child $c")

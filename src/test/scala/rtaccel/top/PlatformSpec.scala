@@ -21,13 +21,13 @@ class PlatformSpec extends AnyFunSuite {
   // PIPELINE: every case at the presets' auto (registers for 150 MHz on the paper's Virtex-5) but one grid point
   // at none (the fixed stages); make regress adds a deep budget
   // (the family the budget is reckoned for: ecp5's circuit differs in its DSP tiles and its delay chains in LUT RAM)
-  // (TRI_II: the triangle pipe's initiation interval, its operators shared by that many operations of a primitive)
+  // (the last: TRI_II and BOX_II, the IU pipes' initiation interval, their operators shared by that many operations of a job)
   private val grid: Seq[(Int, Int, Seq[Int], Pipelining, String, Int)] =
     if (full) (for (t <- Seq(1, 2, 4, 8, 32); m <- Seq(2, 4, 8)) yield (t, m, Seq(1, 2, 4, 8, 16), Pipelining.Auto, "xc5v", 1)) ++
       Seq((4, 2, Seq(2), Pipelining.Fixed, "xc5v", 1), (2, 4, Seq(4), Pipelining.Levels(3), "xc5v", 1), (2, 4, Seq(4), Pipelining.Auto, "ecp5", 1),
         (2, 2, Seq(16), Pipelining.Auto, "ecp5", 2), (4, 4, Seq(4), Pipelining.Fixed, "xc5v", 2))
-    // make test: two TUs with the longest leaves on ecp5's circuit at M=2 and TRI_II=2 (its 18x18 tiles make the
-    // largest model of make test; M=4 and TRI_II=1 there are make regress's), four TUs with one primitive per leaf at
+    // make test: two TUs with the longest leaves on ecp5's circuit at M=2 and TRI_II=BOX_II=2 (its 18x18 tiles make
+    // the largest model of make test; M=4 and intervals of 1 there are make regress's), four TUs with one primitive per leaf at
     // the fixed stages; every other case of make test runs the Virtex-5 circuit at auto and M=4
     else Seq((2, 2, Seq(16), Pipelining.Auto, "ecp5", 2), (4, 2, Seq(1), Pipelining.Fixed, "xc5v", 1))
 
@@ -51,13 +51,13 @@ class PlatformSpec extends AnyFunSuite {
                      packed: Boolean = false, nodeQuant: Int = 0, triFormat: rtaccel.fp.FpFormat = rtaccel.fp.FpFormat.fp32, ius: Int = 1, channels: Int = 1,
                      order: String = RespOrder.Request, rayStore: Boolean = false, forward: Boolean = false, banks: Int = 0,
                      pipeline: Pipelining = Pipelining.Auto, family: String = "xc5v", errorMode: String = MemFaults.Sticky, retries: Int = 1, steps: Option[Int] = None,
-                     triII: Int = 1) = {
+                     ii: Int = 1) = {
     // level-aware node caches read the level field of the paper's Section 7.2 layout
     val base = if (node.policy.levelAware && node.entries > 0) Presets.paper2017Lrp else Presets.paper2017
     val p = base.copy(name = base.name, tus = tus, m = m, mppl = mppl, stackDepth = stack, nodeCache = node, primCache = prim,
       shortStack = short, boxFormat = box, triTest = tri, primPacked = packed, nodeQuantBits = nodeQuant, triFormat = triFormat, ius = ius, memChannels = channels,
       respByPath = order != RespOrder.Request, respTagged = order == RespOrder.Tagged, rayStore = rayStore, tagForward = forward, nodeBanks = banks,
-      pipelining = pipeline, family = family, memRetries = retries, maxSteps = steps, triInterval = triII)
+      pipelining = pipeline, family = family, memRetries = retries, maxSteps = steps, triInterval = ii, boxInterval = ii)
     val b = Cli.build(scene, p, fit = false, stack = Some(stack))
     val o = rtaccel.sim.PlatformRun.run(b, rays, rtaccel.sim.PlatformRun.SimOptions(s"soup-t$tus-m$m-k$mppl-i$ius-c$channels-b$banks", memJitter = jitter, hostStall = stall,
       memErrorRate = errorRate, seed = seed, build = Some(rtaccel.sim.VerilatorBuild.quick), work = "build/sim-test/PlatformSpec",
@@ -106,9 +106,9 @@ class PlatformSpec extends AnyFunSuite {
   private val smallStack = 3
   private def gridStack(pl: Pipelining) = if (!full && pl == Pipelining.Fixed) smallStack else 64
   for ((tus, m, mppls, pl, fam, ii) <- grid; mppl <- mppls)
-    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl PIPELINE=${pl.name}${if (fam != "xc5v") s" for $fam" else ""}${if (ii > 1) s" TRI_II=$ii" else ""}${if (gridStack(pl) < 64) s"; a ${gridStack(pl)}-entry stack overflows exactly the model's rays" else ""}") {
-      val j = runOne(tus, m, mppl, rays, scene, pipeline = pl, family = fam, stack = gridStack(pl), triII = ii).json
-      assert(j("tri_ii").num == ii, "the JSON line names TRI_II")
+    test(s"bit-exact against the reference model: TUs=$tus M=$m MPPL=$mppl PIPELINE=${pl.name}${if (fam != "xc5v") s" for $fam" else ""}${if (ii > 1) s" TRI_II=BOX_II=$ii" else ""}${if (gridStack(pl) < 64) s"; a ${gridStack(pl)}-entry stack overflows exactly the model's rays" else ""}") {
+      val j = runOne(tus, m, mppl, rays, scene, pipeline = pl, family = fam, stack = gridStack(pl), ii = ii).json
+      assert(j("tri_ii").num == ii && j("box_ii").num == ii, "the JSON line names TRI_II and BOX_II")
       if (gridStack(pl) < 64) someOverflowed(j, gridStack(pl))
       assert(j("pipeline")("mode").str == pl.name && j("pipeline")("budget_levels").isNull == (pl == Pipelining.Fixed), ujson.write(j("pipeline")))
       assert(j("pipeline")("family").str == fam, ujson.write(j("pipeline")))

@@ -22,7 +22,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
   // configuration words of our own choosing: whatever the generator passes must read back unchanged
   private val constants: Seq[(RegMap.Reg, BigInt)] = Seq(Config0 -> BigInt(0x00200804L), Config1 -> BigInt(0x1f400040L),
     NodeCache -> BigInt(0x0003012dL), PrimCache -> BigInt(0x00000000L), Formats -> BigInt(0x00056700L), Formats2 -> BigInt(0x00000008L),
-    Pipeline -> BigInt(0x22150d06L))
+    Pipeline -> BigInt(0x22150d06L), Intervals -> BigInt(0x00000042L))
   private def regFile = new RegFile(constants, counterNames, primBaseBits, maxLevelReset, levelBits, maxStepsReset, stepBits)
   private val Magic = 0x52544143L // 'RTAC', docs
   private def lsb(r: Reg, f: String) = r.fields.find(_.name == f).get.lsb
@@ -173,7 +173,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
     withHost(seed) { (dut, h) =>
       val counters = distinctCounters(h.rnd)
       pokeCounters(dut, counters)
-      val directed = Seq(0x001, 0x002, 0x003, 0x01e, 0x035, 0x04e, 0x050, 0x0fc, 0x101, 0x106,
+      val directed = Seq(0x001, 0x002, 0x003, 0x01e, 0x035, 0x04e, 0x054, 0x0fc, 0x101, 0x106,
         RegMap.CounterBase + 8 * counterNames.length, (1 << addrBits) - 4, (1 << addrBits) - 1)
       val random = Iterator.continually(h.rnd.nextInt(1 << addrBits)).filterNot(mapped).take(150).toSeq
       val offsets = directed ++ random
@@ -201,7 +201,7 @@ class RegFileSpec extends AnyFunSuite with ChiselScalatestTester {
       h.tick = () => if (dut.io.clearCounters.peek().litToBoolean) clears += 1
       val before = h.dump()
       val ro = regs.filter(_.access == RO)
-      assert(ro.length == 12 + 2 * counterNames.length)
+      assert(ro.length == 13 + 2 * counterNames.length)
       for (r <- ro; data <- Seq(0xffffffffL, 0L, h.rnd.nextInt().toLong); strb <- Seq(0xf, 1 + h.rnd.nextInt(14))) {
         val resp = h.write(r.offset, data, strb)
         assert(resp == AxiLite.SlvErr, f"write 0x$data%08x strb $strb to ${r.name}: response $resp, want SLVERR (seed $seed)")

@@ -30,7 +30,7 @@ class RegisterFieldsSpec extends AnyFunSuite {
       "RESP_ORDER" -> base.copy(respByPath = true), "RAY_STORE" -> base.copy(rayStore = true), "TAG_FORWARD" -> base.copy(tagForward = true),
       "NODE_BANKS" -> base.copy(nodeBanks = 2, ius = 2, respByPath = true, respTagged = true), "MEM_RETRIES" -> base.copy(memRetries = 2),
       "BOX_FORMAT" -> base.copy(boxFormat = FpFormat(6, 9)), "TRI_TEST" -> base.copy(triTest = TriTest.Watertight),
-      "TRI_FORMAT" -> base.copy(triFormat = FpFormat.fp64), "TRI_II" -> base.copy(triInterval = 2), "NODE_FORMAT" -> base.copy(nodeQuantBits = 8),
+      "TRI_FORMAT" -> base.copy(triFormat = FpFormat.fp64), "TRI_II" -> base.copy(triInterval = 2), "BOX_II" -> base.copy(boxInterval = 2), "NODE_FORMAT" -> base.copy(nodeQuantBits = 8),
       "PRIM_FORMAT" -> base.copy(primPacked = true), "PIPELINE" -> base.copy(pipelining = Pipelining.parse("4")),
       "NODE_CACHE" -> base.copy(nodeCache = base.nodeCache.copy(entries = 1024)), "NODE_WAYS" -> base.copy(nodeCache = CacheParams(8192, 2, CachePolicy.Lru)),
       "NODE_POLICY" -> base.copy(nodeCache = base.nodeCache.copy(policy = CachePolicy.Bf)),
