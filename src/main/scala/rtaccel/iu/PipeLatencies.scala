@@ -28,12 +28,12 @@ object PipeLatencies {
     })
   }
 
-  /** Cycles PIPELINE (and TRI_II's shared operators) add to a node test and to a leaf's triangle tests over the fixed
-    * stages of a primitive per cycle (0, 0 at none and TRI_II=1): what the throughput model (cache.Throughput),
-    * calibrated there, adds to a ray's latency.
+  /** Cycles PIPELINE (and the shared operators of TRI_II and BOX_II) add to a node test and to a leaf's triangle tests
+    * over the fixed stages of a job per cycle (0, 0 at none and intervals of 1): what the throughput model
+    * (cache.Throughput), calibrated there, adds to a ray's latency.
     */
-  def extraOverFixed(p: PlatformParams): (Int, Int) = if (p.stageBudget.isEmpty && p.triInterval == 1) (0, 0) else {
-    val l = of(p); val f = of(p.copy(pipelining = rtaccel.config.Pipelining.Fixed, triInterval = 1))
+  def extraOverFixed(p: PlatformParams): (Int, Int) = if (p.stageBudget.isEmpty && p.triInterval == 1 && p.boxInterval == 1) (0, 0) else {
+    val l = of(p); val f = of(p.copy(pipelining = rtaccel.config.Pipelining.Fixed, triInterval = 1, boxInterval = 1))
     (l.box - f.box, l.tri - f.tri)
   }
 

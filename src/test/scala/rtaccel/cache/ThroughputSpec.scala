@@ -46,6 +46,12 @@ class ThroughputSpec extends AnyFunSuite {
     val bare = Presets.paper2017.copy(nodeCache = CacheParams(), memRetries = 0)
     assert(bare.passSliceCycles == 0 && bare.copy(ius = 2).passSliceCycles == 3 && bare.copy(memRetries = 1).passSliceCycles == 3)
     assert(Throughput.predict(bare, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 6)
+    // TRI_II / BOX_II at the fixed stages: each node and leaf test takes its shared operators' extra cycles over the
+    // pipes of a job per cycle (the latencies of the elaborated pipes, taken here apart from extraOverFixed)
+    val shared = p.copy(triInterval = 2, boxInterval = 4)
+    val (l1, l2) = (rtaccel.iu.PipeLatencies.of(p), rtaccel.iu.PipeLatencies.of(shared))
+    assert(l2.box > l1.box && l2.tri > l1.tri)
+    assert(Throughput.predict(shared, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * (l2.box - l1.box) + (l2.tri - l1.tri))
     // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:
     // (2 x 232 - 2 x 72 + 2 x 4 + 4 x path) / 2, by hand for two path latencies
     for ((path, expect) <- Seq(8.0 -> 180.0, 5.0 -> 174.0)) {
