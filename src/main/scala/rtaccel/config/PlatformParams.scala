@@ -187,8 +187,6 @@ final case class PlatformParams(
     s"TRI_FORMAT=${triFormat.name} widens Möller–Trumbore only; TRI_TEST=watertight takes TRI_FORMAT=fp32 (its edge signs are exact already)")
   require(triInterval >= 1 && triInterval <= PlatformParams.MaxTriInterval, s"TRI_II must be 1..${PlatformParams.MaxTriInterval} cycles (got $triInterval)")
   require(boxInterval >= 1 && boxInterval <= PlatformParams.MaxBoxInterval, s"BOX_II must be 1..${PlatformParams.MaxBoxInterval} cycles (got $boxInterval)")
-  require(triInterval == 1 || triTest == TriTest.Mt,
-    s"TRI_II=$triInterval shares Möller–Trumbore's operators; TRI_TEST=watertight takes TRI_II=1")
   require(nodeQuantBits == 0 || (nodeQuantBits >= 2 && nodeQuantBits <= 16),
     s"NODE_FORMAT=q$nodeQuantBits: a quantized plane takes 2..16 bits (the 16-bit field of the node layout)")
   require(rtaccel.fp.FpFormat.fp32.holds(boxFormat),

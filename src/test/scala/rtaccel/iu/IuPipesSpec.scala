@@ -202,10 +202,11 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
       (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false, interval = k)
   }
   private val watertight = new rtaccel.model.RayTriangleWatertight
-  for (pl <- Seq(deep) ++ (if (regress) Seq(auto, fixed) else Nil)) {
-    val pp = p.copy(pipelining = pl)
-    triPipeTest[WatertightPipe](s"watertight pipe (WatertightPipe, PIPELINE=${pl.name})", randoms, new WatertightPipe(pp.pipes), _.latency,
-      _.io, (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true)
+  // (TRI_II=2 shares its operators as TriPipe's: make test at none, make regress at auto)
+  for ((pl, ii, n) <- Seq((deep, 1, randoms), (fixed, 2, 3000)) ++ (if (regress) Seq((auto, 1, randoms), (fixed, 1, randoms), (auto, 2, 5000)) else Nil)) {
+    val pp = p.copy(pipelining = pl, triTest = TriTest.Watertight, triInterval = ii)
+    triPipeTest[WatertightPipe](s"watertight pipe (WatertightPipe, PIPELINE=${pl.name}${if (ii > 1) s", TRI_II=$ii" else ""})", n, new WatertightPipe(pp.pipes), _.latency,
+      _.io, (r, tmax, v, o) => watertight.test(r, tmax, v, o), ties = true, interval = ii)
   }
   if (regress) triPipeTest[TriPipe]("Möller–Trumbore pipe (TriPipe, PIPELINE=none)", 20000, new TriPipe(p.copy(pipelining = fixed).pipes),
     d => { assert(d.latency == 8 + p.divStages, "PIPELINE=none keeps 8 + divStages"); d.latency }, _.io,
