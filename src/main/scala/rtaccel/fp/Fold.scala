@@ -24,6 +24,16 @@ final class Fold(pipe: Stager, val k: Int, valid: Bool) {
     marks(t)
   }
 
+  /** The pipe's input: as it comes with k = 1 (`depth` levels of the driver's logic in front of it), else a register
+    * loaded on valid (cycle 1), which holds the job until the next one. */
+  def input[T <: Data](x: T, depth: Int): Timed[T] = if (k == 1) pipe.in(x, depth) else Timed(pipe.hold(x, valid), 1, 0)
+
+  /** An assertion that no job comes within k cycles of the one before (`what` names the pipe and its knob). */
+  def assertSpacing(what: String): Unit = if (k > 1) {
+    val recent = (1 until k).map(at).reduce(_ || _)
+    when(valid) { assert(!recent, s"$what: jobs closer than $k cycles") }
+  }
+
   /** LUT levels of the selection in front of a shared operator: a 2:1 mux, else a priority mux of k inputs. */
   val selectLevels: Int = if (k == 2) 1 else 2
 

@@ -42,15 +42,14 @@ class BoxPipe(p: PipeParams) extends Module {
   // the input is then held in a register loaded on valid, so that every value of the node stays put for k cycles
   private val ii = p.boxInterval
   private val fold = new rtaccel.fp.Fold(pipe, ii, io.in.valid)
-  private val job = if (ii == 1) pipe.in(io.in.bits, BoxPipe.inputDepth) else Timed(pipe.hold(io.in.bits, io.in.valid), 1, 0)
+  private val job = fold.input(io.in.bits, BoxPipe.inputDepth)
   private def word(k: Int) = job.map(0)(_.words(k))
   private def o(a: Int) = job.map(0)(_.ray.o(a))
   private def inv(a: Int) = job.map(0)(_.ray.inv(a))
-  private def each(ops: Seq[Seq[Timed[UInt]]])(fn: Seq[Timed[UInt]] => Timed[UInt]) = fold.batch(ops)(fn)
   // per child: t0 x/y/z of the min planes, then t1 of the max planes (stage 2), as the model's RayBox(Reduced)
   private val (t01, tminB, tmaxB) = if (bf == f) {
-    val ab = each(Seq.tabulate(p.m, 6)((c, k) => Seq(word(7 * c + k), o(k % 3))).flatten)(x => stage(Fp.subT(pipe, f, x(0), x(1))))
-    (each(ab.zipWithIndex.map { case (x, i) => Seq(x, inv(i % 3)) })(x => stage(Fp.mulT(pipe, f, x(0), x(1)))),
+    val ab = fold.batch(Seq.tabulate(p.m, 6)((c, k) => Seq(word(7 * c + k), o(k % 3))).flatten)(x => stage(Fp.subT(pipe, f, x(0), x(1))))
+    (fold.batch(ab.zipWithIndex.map { case (x, i) => Seq(x, inv(i % 3)) })(x => stage(Fp.mulT(pipe, f, x(0), x(1)))),
       job.map(0)(_.ray.tmin), job.map(0)(_.tmax))
   } else outward()
 
@@ -64,7 +63,7 @@ class BoxPipe(p: PipeParams) extends Module {
     def dir(x: Timed[UInt]) = x.map(0)(_(0))
     val ab = if (ii == 1) Seq.tabulate(p.m, 6) { (c, k) =>
       stage(Fp.subDirectedT(pipe, f, bf, word(7 * c + k), o(k % 3), const(k >= 3))) }.flatten
-    else each(Seq.tabulate(p.m, 6)((c, k) => Seq(word(7 * c + k), o(k % 3), Timed((k >= 3).B.asUInt, 0, 0))).flatten)(x =>
+    else fold.batch(Seq.tabulate(p.m, 6)((c, k) => Seq(word(7 * c + k), o(k % 3), Timed((k >= 3).B.asUInt, 0, 0))).flatten)(x =>
       stage(Fp.subDirectedT(pipe, f, bf, x(0), x(1), dir(x(2)))))
     val invLo = Seq.tabulate(3)(a => stage(Fp.convertT(pipe, f, bf, inv(a), const(false))))
     val invHi = Seq.tabulate(3)(a => stage(Fp.convertT(pipe, f, bf, inv(a), const(true))))
@@ -84,7 +83,7 @@ class BoxPipe(p: PipeParams) extends Module {
       val pick = Timed(Mux(useHi, hi.v, lo.v), dd.at, Seq(lo, hi, dd, iv).map(_.depth).max + 1)
       Seq(dd, pick, Timed(up.asUInt, dd.at, iv.depth))
     }.flatten
-    val t = each(ops)(x => stage(Fp.mulDirectedT(pipe, bf, x(0), x(1), dir(x(2)))))
+    val t = fold.batch(ops)(x => stage(Fp.mulDirectedT(pipe, bf, x(0), x(1), dir(x(2)))))
     (t, tmin1, tmax1)
   }
 
@@ -149,10 +148,8 @@ class BoxPipe(p: PipeParams) extends Module {
   val latency: Int = out.at
   io.out.bits := out.v
   io.out.valid := pipe.valid(io.in.valid, latency)
-  if (ii > 1) { // the IU delivers a node every k cycles at most (PlatformParams checks its beats per node)
-    val recent = (1 until ii).map(fold.at(_)).reduce(_ || _)
-    when(io.in.valid) { assert(!recent, s"BoxPipe: nodes closer than BOX_II=$ii cycles") }
-  }
+  // the IU delivers a node every k cycles at most (PlatformParams checks its beats per node)
+  fold.assertSpacing("BoxPipe (BOX_II)")
   /** Its pipeline registers, its divider's included (a census for the cost model). */
   val census: rtaccel.fp.Stager.Census = pipe.census
 }

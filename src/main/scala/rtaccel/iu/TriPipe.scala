@@ -64,23 +64,22 @@ class TriPipe(p: PipeParams) extends Module {
   // then held in a register loaded on valid, so that every value of the job stays put for k cycles
   private val k = p.triInterval
   private val fold = new rtaccel.fp.Fold(pipe, k, io.in.valid)
-  private val job = if (k == 1) pipe.in(io.in.bits, TriPipe.inputDepth) else Timed(pipe.hold(io.in.bits, io.in.valid), 1, 0)
+  private val job = fold.input(io.in.bits, TriPipe.inputDepth)
   private def vtx(v: Int, a: Int) = wide(job.map(0)(_.words(3 * v + a)))
   private def d(a: Int) = wide(job.map(0)(_.ray.d(a)))
-  private def each(ops: Seq[Seq[Timed[UInt]]])(fn: Seq[Timed[UInt]] => Timed[UInt]) = fold.batch(ops)(fn)
   // 1
-  private val Seq(e1, e2, s) = each(Seq[Int => Timed[UInt]](vtx(1, _), vtx(2, _), a => wide(job.map(0)(_.ray.o(a)))).flatMap(x =>
+  private val Seq(e1, e2, s) = fold.batch(Seq[Int => Timed[UInt]](vtx(1, _), vtx(2, _), a => wide(job.map(0)(_.ray.o(a)))).flatMap(x =>
     (0 until 3).map(a => Seq(x(a), vtx(0, a)))))(x => stage(sub(x(0), x(1)))).grouped(3).toSeq
   // 2, 3: cross products as a.i*b.j - a.j*b.i, products first
   private val crossAxes = Seq((1, 2), (2, 0), (0, 1))
   private def crossOps(a: Int => Timed[UInt], b: Int => Timed[UInt]) = crossAxes.flatMap { case (i, j) => Seq(Seq(a(i), b(j)), Seq(a(j), b(i))) }
-  private val Seq(pv, qv) = each(each(crossOps(d, e2) ++ crossOps(s, e1))(x => stage(mul(x(0), x(1)))).grouped(2).toSeq)(x =>
+  private val Seq(pv, qv) = fold.batch(fold.batch(crossOps(d, e2) ++ crossOps(s, e1))(x => stage(mul(x(0), x(1)))).grouped(2).toSeq)(x =>
     stage(sub(x(0), x(1)))).grouped(3).toSeq
   // 4: products of the four dot products e1.p, s.p, d.q, e2.q; 5, 6: (x0 + x1) + x2
   private val dots = Seq[(Int => Timed[UInt], Int => Timed[UInt])]((e1, pv), (s, pv), (d, qv), (e2, qv))
-  private val prods = each(dots.flatMap { case (a, b) => (0 until 3).map(c => Seq(a(c), b(c))) })(x => stage(mul(x(0), x(1)))).grouped(3).toSeq
-  private val firsts = each(prods.map(_.take(2)))(x => stage(add(x(0), x(1))))
-  private val Seq(det, ut, vt, tt) = each(firsts.zip(prods).map { case (f0, pr) => Seq(f0, pr(2)) })(x => stage(add(x(0), x(1))))
+  private val prods = fold.batch(dots.flatMap { case (a, b) => (0 until 3).map(c => Seq(a(c), b(c))) })(x => stage(mul(x(0), x(1)))).grouped(3).toSeq
+  private val firsts = fold.batch(prods.map(_.take(2)))(x => stage(add(x(0), x(1))))
+  private val Seq(det, ut, vt, tt) = fold.batch(firsts.zip(prods).map { case (f0, pr) => Seq(f0, pr(2)) })(x => stage(add(x(0), x(1))))
   private val uvt = Seq(ut, vt, tt)
   // 7..: inv = 1/det
   private val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget))
@@ -91,7 +90,7 @@ class TriPipe(p: PipeParams) extends Module {
   // (registered with a budget; with PIPELINE=none the depth is not counted)
   private val inv = Timed(div.io.out.bits, detIn(0).at + div.latency, 0)
   // u, v, t
-  private val Seq(u, v, t) = each(uvt.map(x => Seq(x, inv)))(x => stage(mul(x(0), x(1))))
+  private val Seq(u, v, t) = fold.batch(uvt.map(x => Seq(x, inv)))(x => stage(mul(x(0), x(1))))
   // the conditions
   private val conds = Seq(Fp.cmpT(pipe, f, det, zero)((g, a, b) => !Fp.eq(g, a, b)), cmp(u, zero)(Fp.ge), cmp(v, zero)(Fp.ge),
     cmp(add(u, v), one)(Fp.le), cmp(t, wide(job.map(0)(_.ray.tmin)))(Fp.ge), cmp(t, wide(job.map(0)(_.tmax)))(Fp.lt))
@@ -102,10 +101,8 @@ class TriPipe(p: PipeParams) extends Module {
   io.out.bits := out.v
   // the divider's valid, carried on to the result
   io.out.valid := ShiftRegister(div.io.out.valid, latency - inv.at, false.B, true.B)
-  if (k > 1) { // the IU delivers a primitive every k cycles at most (PlatformParams checks its beats per primitive)
-    val recent = (1 until k).map(fold.at(_)).reduce(_ || _)
-    when(io.in.valid) { assert(!recent, s"TriPipe: jobs closer than TRI_II=$k cycles") }
-  }
+  // the IU delivers a primitive every k cycles at most (PlatformParams checks its beats per primitive)
+  fold.assertSpacing("TriPipe (TRI_II)")
   /** Its pipeline registers, its divider's included (a census for the cost model). */
   val census: rtaccel.fp.Stager.Census = pipe.census + div.census
 }

@@ -39,8 +39,7 @@ class WatertightPipe(p: PipeParams) extends Module {
   // input held in a register loaded on valid (TriPipe's scheme); k = 1 is the pipe of a job per cycle
   private val ii = p.triInterval
   private val fold = new rtaccel.fp.Fold(pipe, ii, io.in.valid)
-  private def each(ops: Seq[Seq[Timed[UInt]]])(fn: Seq[Timed[UInt]] => Timed[UInt]) = fold.batch(ops)(fn)
-  private val job = if (ii == 1) pipe.in(io.in.bits, TriPipe.inputDepth) else Timed(pipe.hold(io.in.bits, io.in.valid), 1, 0)
+  private val job = fold.input(io.in.bits, TriPipe.inputDepth)
   private def field(fn: TriJob => UInt) = job.map(0)(fn)
 
   // 1: kz = axis of the largest |d| (ties to the lower axis), kx = kz+1, ky = kx+1 (mod 3)
@@ -54,16 +53,16 @@ class WatertightPipe(p: PipeParams) extends Module {
   private def k(i: Int) = axes.map(0)(_(i))
   private val dv = (0 until 3).map(a => field(_.ray.d(a)))
   private val sz0 = pickT(k(2), (0 until 3).map(a => field(_.ray.inv(a))))
-  private val Seq(sx, sy) = each(Seq(Seq(pickT(k(0), dv), sz0), Seq(pickT(k(1), dv), sz0)))(x => stage(mul(x(0), x(1))))
+  private val Seq(sx, sy) = fold.batch(Seq(Seq(pickT(k(0), dv), sz0), Seq(pickT(k(1), dv), sz0)))(x => stage(mul(x(0), x(1))))
   private val sz = stage(sz0)
-  private val rel = each(for (v <- 0 until 3; a <- 0 until 3) yield Seq(field(_.words(3 * v + a)), field(_.ray.o(a))))(x =>
+  private val rel = fold.batch(for (v <- 0 until 3; a <- 0 until 3) yield Seq(field(_.words(3 * v + a)), field(_.ray.o(a))))(x =>
     stage(sub(x(0), x(1)))).grouped(3).toSeq
   private val k1 = (0 until 3).map(i => stage(k(i)))
 
   // 2, 3: the shear products and the sheared x, y, z of each vertex A, B, C
   private val kzs = (0 until 3).map(v => pickT(k1(2), rel(v)))
-  private val shears = each(for (v <- 0 until 3; s <- Seq(sx, sy, sz)) yield Seq(s, kzs(v)))(x => stage(mul(x(0), x(1)))).grouped(3).toSeq
-  private val xy = each(for (v <- 0 until 3; i <- 0 until 2) yield Seq(stage(pickT(k1(i), rel(v))), shears(v)(i)))(x =>
+  private val shears = fold.batch(for (v <- 0 until 3; s <- Seq(sx, sy, sz)) yield Seq(s, kzs(v)))(x => stage(mul(x(0), x(1)))).grouped(3).toSeq
+  private val xy = fold.batch(for (v <- 0 until 3; i <- 0 until 2) yield Seq(stage(pickT(k1(i), rel(v))), shears(v)(i)))(x =>
     stage(sub(x(0), x(1)))).grouped(2).toSeq
   private val zs = (0 until 3).map(v => stage(shears(v)(2)))
   private def x(v: Int) = xy(v)(0); private def y(v: Int) = xy(v)(1); private def z(v: Int) = zs(v)
@@ -71,8 +70,8 @@ class WatertightPipe(p: PipeParams) extends Module {
   // 4, 5: U = Cx*By - Cy*Bx, V = Ax*Cy - Ay*Cx, W = Bx*Ay - By*Ax, products in both formats
   private val edges = Seq((x(2), y(1), y(2), x(1)), (x(0), y(2), y(0), x(2)), (x(1), y(0), y(1), x(0)))
   private val factors = edges.flatMap { case (a, b, c, d) => Seq(Seq(a, b), Seq(c, d)) }
-  private val e32 = each(each(factors)(x => stage(mul(x(0), x(1)))).grouped(2).toSeq)(x => stage(sub(x(0), x(1))))
-  private val e64 = each(each(factors)(x => stage(Fp.mulWideT(pipe, f, wide, x(0), x(1)))).grouped(2).toSeq)(x =>
+  private val e32 = fold.batch(fold.batch(factors)(x => stage(mul(x(0), x(1)))).grouped(2).toSeq)(x => stage(sub(x(0), x(1))))
+  private val e64 = fold.batch(fold.batch(factors)(x => stage(Fp.mulWideT(pipe, f, wide, x(0), x(1)))).grouped(2).toSeq)(x =>
     stage(Fp.subT(pipe, wide, x(0), x(1))))
 
   // 6: an edge function that is exactly 0 in binary32 takes its exact-sign binary64 value
@@ -85,11 +84,11 @@ class WatertightPipe(p: PipeParams) extends Module {
   // 7: mixed signs miss; U+V; the products of T.  8: det = (U+V)+W, U*Az + V*Bz
   private val signs = e.map(x => cmp(x, zero)(Fp.lt)) ++ e.map(x => cmp(x, zero)(Fp.gt))
   private val mixed = stage(pipe.op(signs.map(_.map(0)(_.asUInt)), 1)(v => v.take(3).reduce(_ | _)(0) && v.drop(3).reduce(_ | _)(0)))
-  private val tp = each((0 until 3).map(i => Seq(e(i), z(i))))(x => stage(mul(x(0), x(1))))
+  private val tp = fold.batch((0 until 3).map(i => Seq(e(i), z(i))))(x => stage(mul(x(0), x(1))))
   private val (det, tSum) = if (ii == 1) (stage(add(stage(add(e(0), e(1))), e(2))), add(stage(add(tp(0), tp(1))), tp(2)))
   else {
-    val firsts = each(Seq(Seq(e(0), e(1)), Seq(tp(0), tp(1))))(x => stage(add(x(0), x(1))))
-    val Seq(d, t) = each(Seq(Seq(firsts(0), e(2)), Seq(firsts(1), tp(2))))(x => stage(add(x(0), x(1))))
+    val firsts = fold.batch(Seq(Seq(e(0), e(1)), Seq(tp(0), tp(1))))(x => stage(add(x(0), x(1))))
+    val Seq(d, t) = fold.batch(Seq(Seq(firsts(0), e(2)), Seq(firsts(1), tp(2))))(x => stage(add(x(0), x(1))))
     (d, t)
   }
 
@@ -103,7 +102,7 @@ class WatertightPipe(p: PipeParams) extends Module {
   private val rcp = Timed(div.io.out.bits, detIn(0).at + div.latency, 0)
 
   // t, u, v and the hit
-  private val Seq(t, u, v) = each(Seq(tSum, e(1), e(2)).map(x => Seq(x, rcp)))(x => stage(mul(x(0), x(1))))
+  private val Seq(t, u, v) = fold.batch(Seq(tSum, e(1), e(2)).map(x => Seq(x, rcp)))(x => stage(mul(x(0), x(1))))
   private val conds = Seq(Fp.cmpT(pipe, f, det, zero)((g, a, b) => !Fp.eq(g, a, b)),
     cmp(t, field(_.ray.tmin))(Fp.ge), cmp(t, field(_.tmax))(Fp.lt))
   private val hit = pipe.op((conds.map(_.map(0)(_.asUInt)) :+ mixed.map(0)(_.asUInt)), 1)(c =>
@@ -114,10 +113,8 @@ class WatertightPipe(p: PipeParams) extends Module {
   io.out.bits := out.v
   // the divider's valid, carried on to the result
   io.out.valid := ShiftRegister(div.io.out.valid, latency - rcp.at, false.B, true.B)
-  if (ii > 1) { // the IU delivers a primitive every k cycles at most (PlatformParams checks its beats per primitive)
-    val recent = (1 until ii).map(fold.at(_)).reduce(_ || _)
-    when(io.in.valid) { assert(!recent, s"WatertightPipe: jobs closer than TRI_II=$ii cycles") }
-  }
+  // the IU delivers a primitive every k cycles at most (PlatformParams checks its beats per primitive)
+  fold.assertSpacing("WatertightPipe (TRI_II)")
   /** Its pipeline registers, its divider's included (a census for the cost model). */
   val census: rtaccel.fp.Stager.Census = pipe.census + div.census
 }
