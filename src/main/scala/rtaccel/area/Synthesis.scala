@@ -108,7 +108,7 @@ object Synthesis {
 
   /** The cache key of a circuit: its Verilog files (names and bytes) and `extra` (tools, target, recipe). */
   private[area] def hash(files: Seq[Path], extra: String): String = {
-    val named = files.sortBy(_.getFileName.toString).flatMap(f => Seq(f.getFileName.toString.getBytes("UTF-8"), Files.readAllBytes(f)))
-    rtaccel.io.Digest.hex(12, named :+ extra.getBytes("UTF-8"): _*)
+    val named = files.sortBy(_.getFileName.toString).iterator.flatMap(f => Iterator(f.getFileName.toString.getBytes("UTF-8"), Files.readAllBytes(f)))
+    rtaccel.io.Digest.hexOfAll(12, named ++ Iterator(extra.getBytes("UTF-8")))
   }
 }

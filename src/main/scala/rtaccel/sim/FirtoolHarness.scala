@@ -26,7 +26,7 @@ object FirtoolHarness {
   def shell[M <: Module, I <: Data](gen: => M, dir: Path)(io: M => I): Shell[M, I] = {
     var top: Option[M] = None
     val files = rtaccel.cli.EmitVerilog.emitModule({ val m = gen; top = Some(m); m }, dir)
-    val digest = rtaccel.io.Digest.hex(6, files.map(f => Files.readAllBytes(f)): _*)
+    val digest = rtaccel.io.Digest.hexOfAll(6, files.iterator.map(f => Files.readAllBytes(f)))
     val m = top.get
     val port = io(m)
     // firtool puts the memories' $readmemh (SimHarness's image and rays) under ENABLE_INITIAL_MEM_, which its
