@@ -70,17 +70,20 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   // one FIFO for every job (RESP_ORDER=request), or FIFO 0 for nodes and FIFO 1 for leaves (RESP_ORDER=path)
   // (instance names: `jobs` as before RESP_ORDER existed, `jobs_node` / `jobs_leaf` with path)
   // (path: each kind's FIFO its own module, so that the fields its kind never reads are not stored)
-  val jobQs = (if (p.respTagged) Nil else if (p.respByPath) Seq("jobs_node", "jobs_leaf") else Seq("jobs")).map { n =>
-    val q = Module(new Queue(new Job, maxOutstanding)).suggestName(n)
+  // (with PIPELINE a StagedQueue: its write pointer out of the enqueue's handshake, a job visible a cycle later)
+  val jobQs: Seq[(DecoupledIO[Job], DecoupledIO[Job])] = (if (p.respTagged) Nil else if (p.respByPath) Seq("jobs_node", "jobs_leaf") else Seq("jobs")).map { n =>
+    val (q, enq, deq) = if (p.stageBudget.isDefined) { val q = Module(new rtaccel.arb.StagedQueue(new Job, maxOutstanding)); (q, q.io.enq, q.io.deq) }
+      else { val q = Module(new Queue(new Job, maxOutstanding)); (q, q.io.enq, q.io.deq) }
+    q.suggestName(n)
     if (p.respByPath) chisel3.experimental.doNotDedup(q)
-    q
+    (enq, deq)
   }
   // the requests leave through a register slice with PIPELINE (arb.Slice): the MC's ready then ends here
   val memReq = Wire(Decoupled(new FetchReq(p.respTagBits)))
   io.mem.req <> rtaccel.arb.Slice(p, memReq)
   val r = arb.io.out.bits
   val reqIsLeaf = r.cref(primFlagBit)
-  val jobReady = if (p.respTagged) true.B else if (p.respByPath) Mux(reqIsLeaf, jobQs(1).io.enq.ready, jobQs(0).io.enq.ready) else jobQs(0).io.enq.ready
+  val jobReady = if (p.respTagged) true.B else if (p.respByPath) Mux(reqIsLeaf, jobQs(1)._1.ready, jobQs(0)._1.ready) else jobQs(0)._1.ready
   memReq.valid := arb.io.out.valid && jobReady
   memReq.bits.childRef := r.cref
   for (t <- memReq.bits.tag) t := arb.io.chosen.get
@@ -92,8 +95,8 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   for ((j, q) <- newJob.ray.zip(r.ray)) j := q
   for ((q, i) <- jobQs.zipWithIndex) {
     val mine = if (p.respByPath) reqIsLeaf === (i == 1).B else true.B
-    q.io.enq.valid := arb.io.out.valid && memReq.ready && mine
-    q.io.enq.bits := newJob
+    q._1.valid := arb.io.out.valid && memReq.ready && mine
+    q._1.bits := newJob
   }
   arb.io.out.ready := memReq.ready && jobReady
   // RESP_ORDER=tagged: a requester's job waits in its entry of its kind's table (nodes, leaves: each stores only
@@ -193,10 +196,10 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   val resp = rtaccel.arb.Slice(p, io.mem.resp)
   lazy val primResp = rtaccel.arb.Slice(p, io.mem.primResp.get)
   val (boxJob, triJob0) =
-    if (!p.respByPath) collect(jobQs(0).io.deq, resp, None)
+    if (!p.respByPath) collect(jobQs(0)._2, resp, None)
     else if (p.respTagged) (collect(tableJobs(resp, leaf = false), resp, Some(false))._1,
       collect(tableJobs(primResp, leaf = true), primResp, Some(true))._2)
-    else (collect(jobQs(0).io.deq, resp, Some(false))._1, collect(jobQs(1).io.deq, primResp, Some(true))._2)
+    else (collect(jobQs(0)._2, resp, Some(false))._1, collect(jobQs(1)._2, primResp, Some(true))._2)
 
   // with PIPELINE a node's and a primitive's job pass a register into their pipe: the MC's response mux and the
   // words' assembly then end there, and the pipes' first stages start from it (a cycle more per access, which the
