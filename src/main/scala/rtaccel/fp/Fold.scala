@@ -3,7 +3,8 @@ package rtaccel.fp
 import chisel3._
 import chisel3.util._
 
-/** Operators shared across the cycles of a job, for a datapath that takes a job every `k` cycles at most (TRI_II).
+/** Operators shared across the cycles of a job, for a datapath that takes a job every `k` cycles at most (TRI_II,
+  * BOX_II).
   *
   * Invariant: every value of such a datapath stays the same for k cycles from its `at` (its input is a register
   * loaded on the job's valid; every other value is a function, a delay or a [[batch]] of such values). So one
@@ -39,7 +40,8 @@ final class Fold(pipe: Stager, val k: Int, valid: Bool) {
 
   /** `ops` (each its operands) done by `fn` on ceil(n / k) operators: operator i does operations i*k .. i*k+k-1 on
     * consecutive cycles. `fn` must end in a register (a [[Stager.reg]]) and treat its operands alike (one operator
-    * built per group). The results are registers, valid together `k` cycles after the last operator's result.
+    * built per group). The results are registers, valid together the cycle after the last operation's result (`k`
+    * cycles after the first's), for k cycles.
     */
   def batch(ops: Seq[Seq[Timed[UInt]]])(fn: Seq[Timed[UInt]] => Timed[UInt]): Seq[Timed[UInt]] =
     if (k == 1) ops.map(fn) else {
