@@ -55,9 +55,9 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
       (FpFormat.fp32, TriTest.Watertight, 5000, deep), (FpFormat.parse("fp16"), TriTest.Mt, 6000, auto), (FpFormat.parse("fp24"), TriTest.Mt, 6000, deep),
       (FpFormat.parse("bf16"), TriTest.Watertight, 6000, auto), (FpFormat.fp32, TriTest.Mt, 5000, fixed), (FpFormat.parse("bf16"), TriTest.Mt, 3000, fixed)) else Nil)
   // BOX_II=k: the subtractors and multipliers shared by k planes of a node (fp.Fold), a node every k or k + 1 cycles
-  // with other words between them (make test: 2 at fp32 and auto, 4 at bf16 and none; make regress: 3 at the deep budget)
-  private val boxIntervals = Seq((2, FpFormat.fp32, TriTest.Mt, 2000, auto), (4, FpFormat.parse("bf16"), TriTest.Mt, 1500, fixed)) ++
-    (if (regress) Seq((3, FpFormat.fp32, TriTest.Watertight, 3000, deep)) else Nil)
+  // with other words between them (make test: 4 at bf16 and none; make regress: 2 at fp32 and auto, 3 at the deep budget)
+  private val boxIntervals = Seq((4, FpFormat.parse("bf16"), TriTest.Mt, 1500, fixed)) ++
+    (if (regress) Seq((2, FpFormat.fp32, TriTest.Mt, 2000, auto), (3, FpFormat.fp32, TriTest.Watertight, 3000, deep)) else Nil)
   for ((ii, bf, tt, n, pl) <- boxFormats.map { case (b, t, n, l) => (1, b, t, n, l) } ++ boxIntervals)
   test(s"box pipeline (BOX_FORMAT=${bf.name}, TRI_TEST=${tt.name}, PIPELINE=${pl.name}${if (ii > 1) s", BOX_II=$ii" else ""}) == " +
     s"${if (bf == FpFormat.fp32) "RayBox" else "RayBoxOutward"} on $n random and edge-case nodes (M=4), " + (if (ii == 1) "one per cycle" else s"$ii or ${ii + 1} cycles apart")) {
@@ -196,7 +196,8 @@ class IuPipesSpec extends AnyFunSuite with ChiselScalatestTester {
     (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false)
   // TRI_II=k: the operators shared by k operations of a primitive (fp.Fold), the same results at every depth; k > 2
   // needs a primitive of k beats or more (a 128-bit bus)
-  for ((k, pl, jobs) <- Seq((2, auto, 3000)) ++ (if (regress) Seq((2, fixed, 5000), (3, deep, 5000), (4, auto, 5000)) else Seq((3, fixed, 1500)))) {
+  // (make test: 2 at auto; make regress: 2 at none, 3 at the deep budget and at none, 4 at auto)
+  for ((k, pl, jobs) <- Seq((2, auto, 3000)) ++ (if (regress) Seq((2, fixed, 5000), (3, deep, 5000), (3, fixed, 1500), (4, auto, 5000)) else Nil)) {
     val pk = p.copy(triInterval = k, axiDataBits = if (k > 2) 128 else p.axiDataBits, pipelining = pl)
     triPipeTest[TriPipe](s"Möller–Trumbore pipe at TRI_II=$k, PIPELINE=${pl.name}", jobs, new TriPipe(pk.pipes), _.latency, _.io,
       (r, tmax, v, o) => RayTriangle.test(r, tmax, v, o), ties = false, interval = k)
