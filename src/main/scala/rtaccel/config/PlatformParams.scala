@@ -320,11 +320,11 @@ final case class PlatformParams(
   /** the memory controllers, each with an access order of its own (simulation logs one per MC): one per IU
     * cluster, then one per node bank */
   val memControllers: Int = ius + nodeBanks
-  /** Cycles PIPELINE's registers add to every memory access: the IU arbiter's registered grant, the IU's request
-    * slice, the MC's after its arbiter, the IU's slice on the MC's responses, its register in front of its pipes and
-    * the TU's on its answer (the throughput model adds them; cache.Throughput).
+  /** Cycles PIPELINE's registers add to every memory access: the IU arbiter's registered grant, the IU's slice on the
+    * winner, its request slice, the MC's after its arbiter, the IU's slice on the MC's responses, its register in
+    * front of its pipes and the TU's on its answer (the throughput model adds them; cache.Throughput).
     */
-  def accessSliceCycles: Int = if (stageBudget.isDefined) 6 else 0
+  def accessSliceCycles: Int = if (stageBudget.isDefined) 7 else 0
   /** Cycles PIPELINE adds to each leaf in the TU: its last result is applied a cycle after it arrives, its compare
     * with tmax registered (tu.TraversalUnit; the throughput model adds it). */
   def tuLeafCycles: Int = if (stageBudget.isDefined) 1 else 0

@@ -81,12 +81,26 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   // the requests leave through a register slice with PIPELINE (arb.Slice): the MC's ready then ends here
   val memReq = Wire(Decoupled(new FetchReq(p.respTagBits)))
   io.mem.req <> rtaccel.arb.Slice(p, memReq)
-  val r = arb.io.out.bits
+  // with PIPELINE the winner passes a register slice (arb.Slice) before it becomes a memory request and a job, so the
+  // job queues' and the request slice's ready end there and do not run through the arbiter's grants into the TUs'
+  // states (the smallest platform's routed critical path at TRI_II=BOX_II=2: a job queue's full compare -> the
+  // arbiter -> a TU's state, 9.7 ns of it routing; a cycle more per access: PlatformParams.accessSliceCycles)
+  class Issue extends Bundle {
+    val req = new IuReq(p.tuBits, p.rayStore)
+    val chosen = UInt(math.max(1, log2Ceil(requesters)).W) // the winner's input (RESP_ORDER=tagged only)
+  }
+  val issueIn = Wire(Decoupled(new Issue))
+  issueIn.valid := arb.io.out.valid
+  issueIn.bits.req := arb.io.out.bits
+  issueIn.bits.chosen := arb.io.chosen.getOrElse(0.U)
+  arb.io.out.ready := issueIn.ready
+  val issue = rtaccel.arb.Slice(p, issueIn)
+  val r = issue.bits.req
   val reqIsLeaf = r.cref(primFlagBit)
   val jobReady = if (p.respTagged) true.B else if (p.respByPath) Mux(reqIsLeaf, jobQs(1)._1.ready, jobQs(0)._1.ready) else jobQs(0)._1.ready
-  memReq.valid := arb.io.out.valid && jobReady
+  memReq.valid := issue.valid && jobReady
   memReq.bits.childRef := r.cref
-  for (t <- memReq.bits.tag) t := arb.io.chosen.get
+  for (t <- memReq.bits.tag) t := issue.bits.chosen
   val newJob = Wire(new Job)
   newJob.tu := r.tu
   newJob.isLeaf := reqIsLeaf
@@ -95,16 +109,16 @@ class IntersectionUnit(p: PlatformParams, beatBits: Int, requesters: Int) extend
   for ((j, q) <- newJob.ray.zip(r.ray)) j := q
   for ((q, i) <- jobQs.zipWithIndex) {
     val mine = if (p.respByPath) reqIsLeaf === (i == 1).B else true.B
-    q._1.valid := arb.io.out.valid && memReq.ready && mine
+    q._1.valid := issue.valid && memReq.ready && mine
     q._1.bits := newJob
   }
-  arb.io.out.ready := memReq.ready && jobReady
+  issue.ready := memReq.ready && jobReady
   // RESP_ORDER=tagged: a requester's job waits in its entry of its kind's table (nodes, leaves: each stores only
   // the fields its collection reads) until its answer; each collection sees a job stream whose head is the job its
   // beat's tag names, valid while a job of its kind is outstanding (at least 2 entries: a 1-bit tag addresses them)
   val jobTables = if (p.respTagged) Seq(false, true).map { leaf =>
     val t = Mem(math.max(2, requesters), new Job).suggestName(if (leaf) "jobs_leaf" else "jobs_node")
-    when(memReq.fire && reqIsLeaf === leaf.B) { t.write(arb.io.chosen.get, newJob) }
+    when(memReq.fire && reqIsLeaf === leaf.B) { t.write(issue.bits.chosen, newJob) }
     t
   } else Nil
   def tableJobs(beats: DecoupledIO[FetchBeat], leaf: Boolean): DecoupledIO[Job] = {

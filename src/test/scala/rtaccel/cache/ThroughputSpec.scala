@@ -31,7 +31,7 @@ class ThroughputSpec extends AnyFunSuite {
     assert(u.beatCycles == (2 * 128 + 192) / 32.0)
     assert(math.abs(u.raysPerCycle - 1 / 232.0) < 1e-15)
     // PIPELINE=auto: every node test takes the box pipe's extra cycles, every leaf the triangle pipe's (2 + 1 per ray),
-    // and each of the 3 accesses six cycles of registers (the IU arbiter's registered grant, the IU's request slice,
+    // and each of the 3 accesses seven cycles of registers (the IU arbiter's registered grant, its slice on the winner, the IU's request slice,
     // its slice on the MC's responses and its register in front of the pipes, the MC's slice after its arbiter, the TU's
     // register on its answer); paper2017 has a node cache, so its MC has response buffers and a path slices of its own
     // (its DRAM read, its beats into and out of the buffer): here no access is cached, three cycles more each. The
@@ -39,13 +39,13 @@ class ThroughputSpec extends AnyFunSuite {
     val (bx, tx0) = rtaccel.iu.PipeLatencies.extraOverFixed(Presets.paper2017)
     assert(Presets.paper2017.tuLeafCycles == 1 && p.tuLeafCycles == 0)
     val tx = tx0 + 1
-    assert(bx > 0 && tx0 > 0 && Presets.paper2017.accessSliceCycles == 6 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 3)
-    assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 9)
+    assert(bx > 0 && tx0 > 0 && Presets.paper2017.accessSliceCycles == 7 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 3)
+    assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 10)
     // without a cache (one cluster, one channel, request order) and without re-reads (MEM_RETRIES=0) there are no
     // response buffers and no path slice; re-reads need the buffers
     val bare = Presets.paper2017.copy(nodeCache = CacheParams(), memRetries = 0)
     assert(bare.passSliceCycles == 0 && bare.copy(ius = 2).passSliceCycles == 3 && bare.copy(memRetries = 1).passSliceCycles == 3)
-    assert(Throughput.predict(bare, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 6)
+    assert(Throughput.predict(bare, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 7)
     // TRI_II / BOX_II at the fixed stages: each node and leaf test takes its shared operators' extra cycles over the
     // pipes of a job per cycle (the latencies of the elaborated pipes, taken here apart from extraOverFixed)
     val shared = p.copy(triInterval = 2, boxInterval = 4)
