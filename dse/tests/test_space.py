@@ -76,7 +76,8 @@ def test_any_illegal_value_on_any_axis_is_refused_at_its_line(tmp_path_factory, 
             "CONFIG": "small", "BOARD": "xc7a100t", "MEM_GBPS": 1.2, "CLOCK_MHZ": 150, "BOX_FORMAT": "bf16",
                 "TRI_TEST": "watertight", "TRI_FORMAT": "fp64", "NODE_FORMAT": "q8", "PRIM_FORMAT": "packed",
             "IUS": 1, "MEM_CHANNELS": 2, "RESP_ORDER": "path", "RAY_STORE": 0, "TAG_FORWARD": 1, "NODE_BANKS": 0,
-            "PIPELINE": "auto", "NODE_BYTES": 128, "PRIM_BYTES": 64, "CATALOG": "boards/catalog.json", "MEM_RETRIES": 1, "MAX_STEPS": 1000}
+            "PIPELINE": "auto", "NODE_BYTES": 128, "PRIM_BYTES": 64, "CATALOG": "boards/catalog.json", "MEM_RETRIES": 1, "MAX_STEPS": 1000,
+            "TRI_II": 1, "BOX_II": 1}
     axes.pop(knob, None)
     vs = [vals[knob]] * 3
     vs = list(dict.fromkeys(vs))  # one legal value, then the illegal one inserted at pos
