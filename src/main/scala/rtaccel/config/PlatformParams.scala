@@ -241,10 +241,11 @@ final case class PlatformParams(
   val primStrideBytes: Int = 64
   // the IU's collection hands the pipe a primitive once all its beats are in: one per primStrideBytes / beat cycles
   // at most (packed leaves' records span beats unevenly: no such bound)
-  require(triInterval == 1 || (!primPacked && primStrideBytes * 8 / axiDataBits >= triInterval),
+  private def primBeats = math.max(1, primStrideBytes * 8 / axiDataBits)
+  require(triInterval == 1 || (!primPacked && primBeats >= triInterval),
     s"TRI_II=$triInterval needs a primitive to take at least $triInterval memory beats (it takes " +
-      (if (primPacked) "fewer with PRIM_FORMAT=packed" else s"${math.max(1, primStrideBytes * 8 / axiDataBits)} at a $axiDataBits-bit bus") +
-      s"); use TRI_II=${if (primPacked) 1 else math.max(1, primStrideBytes * 8 / axiDataBits)}" + (if (primPacked) " or PRIM_FORMAT=slot64" else ""))
+      (if (primPacked) "fewer with PRIM_FORMAT=packed" else s"$primBeats at a $axiDataBits-bit bus") +
+      s"); use TRI_II=${if (primPacked) 1 else primBeats}" + (if (primPacked) " or PRIM_FORMAT=slot64" else ""))
   /** Bytes a node occupies in NODE_FORMAT: the full node's slot, or the quantized node (bvh.Quantize) rounded up to
     * a power of two (M=4, q8: 64 B). The stride of the node array in memory, the node fetch's beats and a node
     * cache line of the RTL.
@@ -379,8 +380,8 @@ object PlatformParams {
   /** MEM_RETRIES' largest value: the register map's field (FORMATS2.MEM_RETRIES) has two bits. A transient error
     * clears on the first re-read; more re-reads only delay the flag of an error that stays. */
   val MaxMemRetries = 3
-  /** TRI_II's largest value: the register map's field (FORMATS2.TRI_II) has three bits; a slot64 primitive is four
-    * beats of a 128-bit bus. */
+  /** TRI_II's largest value: a slot64 primitive is four beats of a 128-bit bus, the narrowest with room for a beat
+    * per cycle of the pipe (the register map's INTERVALS.TRI_II has four bits). */
   val MaxTriInterval = 4
   /** BOX_II's largest value: an M=8 node of fp32 planes is eight beats of a 256-bit bus. */
   val MaxBoxInterval = 8
