@@ -380,8 +380,7 @@ object PlatformParams {
   /** MEM_RETRIES' largest value: the register map's field (FORMATS2.MEM_RETRIES) has two bits. A transient error
     * clears on the first re-read; more re-reads only delay the flag of an error that stays. */
   val MaxMemRetries = 3
-  /** TRI_II's largest value: a slot64 primitive is four beats of a 128-bit bus, the narrowest with room for a beat
-    * per cycle of the pipe (the register map's INTERVALS.TRI_II has four bits). */
+  /** TRI_II's largest value: a slot64 primitive is four beats of a 128-bit bus (INTERVALS.TRI_II has four bits). */
   val MaxTriInterval = 4
   /** BOX_II's largest value: an M=8 node of fp32 planes is eight beats of a 256-bit bus. */
   val MaxBoxInterval = 8
