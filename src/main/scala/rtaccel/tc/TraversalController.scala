@@ -107,10 +107,15 @@ class TraversalController(p: PlatformParams) extends Module {
       RegNext(VecInit(TraversalController.lowest(freeNext)), none)
     }
   rayOut.ready := target.reduce(_ || _)
+  /** Cycles after the handshake that the TUs read a ray's bits (TraversalUnit.rayBitsLag): with PIPELINE a TU takes
+    * its ray from a register of its own, so the bits are held a cycle more here, once for all TUs.
+    */
+  val rayBitsLag: Int = rtaccel.tu.TraversalUnit.rayBitsLag(p.stageBudget)
+  private val rayBits = if (rayBitsLag == 0) rayOut.bits else RegNext(rayOut.bits)
   for ((t, i) <- io.tuRay.zipWithIndex) {
     t.valid := rayOut.valid && target(i)
     offered(i) := t.valid
-    t.bits := rayOut.bits
+    t.bits := rayBits
     when(t.valid) { assert(t.ready, "TraversalController: a ray offered to a TU that is not free") }
   }
 

@@ -138,14 +138,16 @@ class RtAccelTop(p: PlatformParams, tapAccesses: Boolean = false) extends Module
     tu.io.box := iu.io.box
     tu.io.tri := iu.io.tri
   }
-  // RAY_STORE=1: the TC hands out at most one ray per cycle; the cluster of the TU that takes it stores it
+  // RAY_STORE=1: the TC hands out at most one ray per cycle; the cluster of the TU that takes it stores it, from the
+  // bits of the cycle the TU reads them (tc.rayBitsLag after the handshake)
   for ((iu, c) <- ius.zipWithIndex; w <- iu.io.rays) {
     val mine = tc.io.tuRay.slice(c * p.tusPerIu, (c + 1) * p.tusPerIu)
     val fires = mine.map(_.fire)
     val v = VecInit(fires).asUInt // at most one bit set (v & (v - 1) clears the lowest): no adder left half unused
     assert((v & (v - 1.U)) === 0.U, "the TC handed out two rays in one cycle")
-    w.valid := fires.reduce(_ || _)
-    w.bits.slot := (if (mine.size == 1) 0.U else OHToUInt(fires))
+    val slot = if (mine.size == 1) 0.U else OHToUInt(fires)
+    w.valid := ShiftRegister(fires.reduce(_ || _), tc.rayBitsLag, false.B, true.B)
+    w.bits.slot := ShiftRegister(slot, tc.rayBitsLag)
     w.bits.ray := mine.head.bits.ray // the TC offers every TU the same ray
   }
   val nodeBanks = if (p.nodeShared) Some(Module(new NodeBanks(p, axiP))) else None

@@ -103,9 +103,15 @@ class TraversalUnit(p: TuParams) extends Module {
   // the push state ends after sorted(lastPush): sorted(1) with the full stack, sorted(skip + 1) with the short one
   val lastPush = if (short) Reg(UInt(log2Ceil(p.m).W)) else WireDefault(1.U(log2Ceil(p.m).W))
 
-  io.ray.ready := state === S.idle
-  io.busy := state =/= S.idle
-  when(io.ray.fire) {
+  // With PIPELINE a ray is taken in the cycle after its handshake, from the bits the TC drives in that cycle
+  // (TraversalUnit.rayBitsLag): the load enables of the ray's registers are then `take`, a register of this TU,
+  // and not the TC's offer ANDed with this TU's state across the chip (the smallest platform's routed critical
+  // path on ECP5: TU state -> the TC's choice -> this TU's enables, docs/timing.md). Not ready in that cycle.
+  private val lateRay = TraversalUnit.rayBitsLag(p.stageBudget) == 1
+  private val take = if (lateRay) RegNext(io.ray.fire, false.B) else io.ray.fire
+  io.ray.ready := state === S.idle && (if (lateRay) !take else true.B)
+  io.busy := state =/= S.idle || (if (lateRay) take else false.B)
+  when(take) {
     r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B; readError := false.B
     stepLimit := false.B; stepsLeft := io.maxSteps; limited := io.maxSteps =/= 0.U; outOfSteps := false.B
     best.id := io.ray.bits.id; best.t := inf; best.prim := "hffffffff".U; best.u := 0.U; best.v := 0.U
@@ -224,4 +230,6 @@ object TraversalUnit {
   val refBits: Int = 32
   val distBits: Int = 32
   val entryBits: Int = refBits + distBits
+  /** Cycles after its handshake that a ray's bits are read (the TC drives them that late): 1 with PIPELINE. */
+  def rayBitsLag(stageBudget: Option[Int]): Int = if (stageBudget.isDefined) 1 else 0
 }

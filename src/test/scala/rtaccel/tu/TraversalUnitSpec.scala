@@ -108,6 +108,20 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
 
       var i = 0
       var rayValid = false; var offering = false; var running = false; var gapUntil = 0L
+      // The ray port's bits are the ray only in the cycle the TU reads them (rayBitsLag cycles after the handshake:
+      // the ray from the first offer on with 0; with 1, the ray in the cycle after the handshake) and garbage else.
+      val bitsLag = TraversalUnit.rayBitsLag(p.stageBudget); var realAt = -1L; var scrambleAt = -1L
+      def pokeRay(ray: Option[PreparedRay]): Unit = {
+        val b = dut.io.ray.bits
+        val g = () => u32(garbage())
+        def put(x: UInt, v: PreparedRay => Float): Unit = x.poke(ray.fold(g())(q => u32(fbits(v(q)))).U)
+        b.id.poke(ray.fold(g())(_ => BigInt(ids(i))).U)
+        for (k <- 0 until 3) {
+          put(b.ray.o(k), q => Seq(q.ox, q.oy, q.oz)(k)); put(b.ray.d(k), q => Seq(q.dx, q.dy, q.dz)(k))
+          put(b.ray.inv(k), q => Seq(q.ix, q.iy, q.iz)(k))
+        }
+        put(b.ray.tmin, _.tmin); put(b.tmax, _.tmax)
+      }
       var r: PreparedRay = null
       var curTmax = 0f // the TU's tmax as the IU sees it: the ray's tmax, lowered by every hit the TU takes
       val schedule = mutable.Queue[(Long, Either[BoxAns, TriAns])]()
@@ -116,14 +130,11 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
       while (i < rays.count) {
         // ---- drive
         if (!offering && rayValid) { dut.io.ray.valid.poke(false.B); rayValid = false } // taken in the last cycle
+        if (cycle == realAt) pokeRay(Some(r))
+        if (cycle == scrambleAt) pokeRay(None)
         if (!running && !offering && cycle >= gapUntil) {
           r = new PreparedRay(rays(i, 0), rays(i, 1), rays(i, 2), rays(i, 3), rays(i, 4), rays(i, 5), rays(i, 6), rays(i, 7))
-          val b = dut.io.ray.bits
-          b.id.poke(ids(i).U)
-          for ((x, k) <- Seq(r.ox, r.oy, r.oz).zipWithIndex) b.ray.o(k).poke(u32(fbits(x)).U)
-          for ((x, k) <- Seq(r.dx, r.dy, r.dz).zipWithIndex) b.ray.d(k).poke(u32(fbits(x)).U)
-          for ((x, k) <- Seq(r.ix, r.iy, r.iz).zipWithIndex) b.ray.inv(k).poke(u32(fbits(x)).U)
-          b.ray.tmin.poke(u32(fbits(r.tmin)).U); b.tmax.poke(u32(fbits(r.tmax)).U)
+          pokeRay(if (bitsLag == 0) Some(r) else None)
           dut.io.ray.valid.poke(true.B)
           rayValid = true; offering = true; curTmax = r.tmax; rayCycles = 0
         }
@@ -157,7 +168,7 @@ class TraversalUnitSpec extends AnyFunSuite with ChiselScalatestTester {
         val rayReady = dut.io.ray.ready.peek().litToBoolean
         if (rayReady == running) fail(s"ray.ready $rayReady while ${if (running) "busy" else "idle"}")
         val wasRunning = running
-        if (offering && rayReady) { offering = false; running = true }
+        if (offering && rayReady) { offering = false; running = true; if (bitsLag > 0) realAt = cycle + 1; scrambleAt = cycle + 1 + bitsLag }
         if (dut.io.req.valid.peek().litToBoolean) {
           if (!wasRunning || waiting) fail("a request while " + (if (waiting) "one is outstanding" else "idle"))
           if (reqReady) {
