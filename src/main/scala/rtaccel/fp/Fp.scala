@@ -191,8 +191,9 @@ object Fp {
     // lowest), never the whole significand (docs/fp.md)
     val j = m + 3
     val lzLevels = Depth.lzc(if (maxLs >= n - 1) n else maxLs + 1)
+    val lut4 = pipe.lutInputs < Depth.LutInputs
     // 1: leading zeros and, beside them, the room left above exponent 1 and the right shift into the subnormal range
-    val lzd = pipe.step(x, lzLevels max (Depth.carry(w) + 1)) { r =>
+    val lzd0 = pipe.step(x, lzLevels max (Depth.carry(w) + 1)) { r =>
       val sig = if (n > n0) Cat(r.sig, 0.U((n - n0).W)) else r.sig
       val ex = r.exp.pad(w)
       // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
@@ -209,12 +210,16 @@ object Fp {
       o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
       o
     }
+    // Where LUTs have 4 inputs the first two segments are cut apart at every budget: counted for 6-input LUTs they
+    // fit 7 levels, mapped to 4-input ones they were 11 (the exponent -> the right shift's saturated amount -> the
+    // sticky mask's decode: the smallest platform's routed critical path on ECP5 at 125 MHz, in TriPipe's shared
+    // rounding, docs/timing.md twenty-first round). Budgets under 7 cut there anyway.
+    val lzd = if (lut4 && pipe.budget.isDefined) pipe.reg(lzd0) else lzd0
     // Where LUTs have 4 inputs, an OR of the right shifter's 28 outputs below the window is a level deeper than Depth
     // counts (it was WatertightPipe's routed critical path on ECP5): the sticky bit is then an AND-OR of the window and
     // a mask decoded a segment earlier. On 6-input LUTs the mask's register and decode cost more than they save
     // (fp32 mul on xc7 at 6 levels: 406 LUTs against 360), so the OR stays there when pipelined; unpipelined (no
     // register between them) the mask is what ABC maps smaller (mul 396 against 441 LUTs).
-    val lut4 = pipe.lutInputs < Depth.LutInputs
     val stickyByMask = canUnderflow && (lut4 || pipe.budget.isEmpty)
     // 1b: the left shift, the leading zeros saturated at the room (its own segment: after a wide count, the compare
     // and its mux were the deepest step of a wide significand, WatertightPipe's routed critical path on ECP5). On
