@@ -79,7 +79,15 @@ class TraversalUnit(p: TuParams) extends Module {
   private val inf = "h7f800000".U(32.W)
 
   object S extends ChiselEnum { val idle, issue, waitBox, push, waitTri, pop, done = Value }
-  val state = RegInit(S.idle)
+  // The state is one-hot: a flip-flop per state, so that testing a state reads one flip-flop and each flip-flop's next
+  // value is an OR of the transitions into it, not a decode of an encoded state (three bits: the state's next value
+  // was 6 LUT levels from the step limit's flag through the request's handshake, the smallest platform's routed
+  // critical path on ECP5, docs/timing.md twenty-first round).
+  private val hot = RegInit(VecInit(S.all.map(x => (x.litValue == S.idle.litValue).B)))
+  private def is(s: S.Type): Bool = hot(s.litValue.toInt)
+  private def goto(s: S.Type): Unit = hot := VecInit(S.all.map(x => s === x))
+  S.all.zipWithIndex.foreach { case (x, i) => require(x.litValue == i, "the states are numbered 0, 1, ...") }
+  assert(PopCount(hot) === 1.U, "TraversalUnit: not in exactly one state")
   val r = Reg(new TuRay)
   val cur = Reg(UInt(32.W))
   val tmax = Reg(UInt(32.W))
@@ -109,33 +117,33 @@ class TraversalUnit(p: TuParams) extends Module {
   // path on ECP5: TU state -> the TC's choice -> this TU's enables, docs/timing.md). Not ready in that cycle.
   private val lateRay = TraversalUnit.rayBitsLag(p.stageBudget) == 1
   private val take = if (lateRay) RegNext(io.ray.fire, false.B) else io.ray.fire
-  io.ray.ready := state === S.idle && (if (lateRay) !take else true.B)
-  io.busy := state =/= S.idle || (if (lateRay) take else false.B)
+  io.ray.ready := is(S.idle) && (if (lateRay) !take else true.B)
+  io.busy := !is(S.idle) || (if (lateRay) take else false.B)
   when(take) {
     r := io.ray.bits; cur := 0.U; tmax := io.ray.bits.tmax; overflow := false.B; readError := false.B
     stepLimit := false.B; stepsLeft := io.maxSteps; limited := io.maxSteps =/= 0.U; outOfSteps := false.B
     best.id := io.ray.bits.id; best.t := inf; best.prim := "hffffffff".U; best.u := 0.U; best.v := 0.U
     stack.foreach(_.clear()); ss.foreach(_.start())
-    state := S.issue
+    goto(S.issue)
   }
 
   // with the short stack, a node below the trail's treeLevels levels ends the ray alike: no tree that fits the trail
   // (Fit.checkTrail) has one, only a loop through a corrupted image makes it, and the trail could not track it
   private val tooDeep = ss.fold(false.B)(s => !cur(p.refBits - 1) && s.level >= p.treeLevels.U)
-  io.req.valid := state === S.issue && !outOfSteps && !tooDeep
-  when(state === S.issue && (outOfSteps || tooDeep)) { stepLimit := true.B; state := S.done } // the fetch is not made
+  io.req.valid := is(S.issue) && !outOfSteps && !tooDeep
+  when(is(S.issue) && (outOfSteps || tooDeep)) { stepLimit := true.B; goto(S.done) } // the fetch is not made
   io.req.bits.tu := index
   io.req.bits.cref := cur
   io.req.bits.tmax := tmax
   io.req.bits.ray.foreach(_ := r.ray) // RAY_STORE=1: the IU's ray store has it, and r.ray is never read
   when(io.req.fire) {
-    state := Mux(cur(p.refBits - 1), S.waitTri, S.waitBox)
+    goto(Mux(cur(p.refBits - 1), S.waitTri, S.waitBox))
     stepsLeft := stepsLeft - 1.U; outOfSteps := limited && stepsLeft === 1.U
   }
 
   // Node: the hit children in the order of their ranks (the box pipe's: nearer first, an equal one in an earlier
   // slot first).
-  when(state === S.waitBox && boxIn.valid) {
+  when(is(S.waitBox) && boxIn.valid) {
     val b = boxIn.bits
     when(b.err) { readError := true.B } // b.hit is all false then: the ray pops on
     val ranks = b.rank
@@ -145,15 +153,15 @@ class TraversalUnit(p: TuParams) extends Module {
     val k = PopCount(b.hit)
     // the first unfinished hit child: rank 0 with the full stack, rank trail(level) with the short one
     val skip = ss.fold(0.U)(_.skip)
-    when(k <= skip) { state := S.pop } // no hit child left: this node is done
+    when(k <= skip) { goto(S.pop) } // no hit child left: this node is done
       .otherwise {
         cur := Mux1H(Seq.tabulate(p.m)(j => (b.hit(j) && ranks(j) === skip) -> b.cref(j))) // exactly one hit child has that rank
         ss.foreach(s => s.level := s.level + 1.U)
         pushIdx := k - 1.U; if (short) lastPush := skip + 1.U
-        state := Mux(k === skip + 1.U, S.issue, S.push)
+        goto(Mux(k === skip + 1.U, S.issue, S.push))
       }
   }
-  when(state === S.push) { // far first: sorted(k-1) down to sorted(skip+1)
+  when(is(S.push)) { // far first: sorted(k-1) down to sorted(skip+1)
     ss match {
       case Some(s) => s.push(sorted(pushIdx).cref, sorted(pushIdx).t)
       case None =>
@@ -161,7 +169,7 @@ class TraversalUnit(p: TuParams) extends Module {
           .otherwise { stack.get.push(sorted(pushIdx)) }
     }
     pushIdx := pushIdx - 1.U
-    when(pushIdx === lastPush) { state := S.issue }
+    when(pushIdx === lastPush) { goto(S.issue) }
   }
 
   // Leaf: results arrive in slot order; an earlier equal t is kept.
@@ -179,38 +187,38 @@ class TraversalUnit(p: TuParams) extends Module {
       take := triIn.bits.hit && Mux(b.valid && take, Fp.lt(f, triIn.bits.t, b.bits.t), Fp.lt(f, triIn.bits.t, tmax))
       (b, take)
   }
-  when(state === S.waitTri && triAt.valid) {
+  when(is(S.waitTri) && triAt.valid) {
     val t = triAt.bits
     when(t.err) { readError := true.B }
     when(takeAt) {
       tmax := t.t; best.t := t.t; best.prim := t.prim; best.u := t.u; best.v := t.v
     }
-    when(t.last) { state := S.pop }
+    when(t.last) { goto(S.pop) }
   }
 
   // A pop loads `cur` whatever its entry's distance: an entry beyond tmax leaves the TU in the pop state, where `cur`
   // is not read, and the next pop or the end overwrites it. So the distance compare drives only the next state, not
   // the enable of 32 flip-flops (the smallest platform's routed critical path on ECP5 ended at `cur`, docs/timing.md)
-  when(state === S.pop) {
+  when(is(S.pop)) {
     ss match {
       case Some(s) =>
         when(!s.empty) {
           val top = s.pop()
           cur := top.cref
-          when(!Fp.gt(f, top.t, tmax)) { state := S.issue }
-        }.elsewhen(s.anyDropped && s.level =/= 0.U) { s.restart(); cur := 0.U; state := S.issue } // from the root again
-          .otherwise { state := S.done } // nothing pending and nothing dropped, or the root itself is finished
+          when(!Fp.gt(f, top.t, tmax)) { goto(S.issue) }
+        }.elsewhen(s.anyDropped && s.level =/= 0.U) { s.restart(); cur := 0.U; goto(S.issue) } // from the root again
+          .otherwise { goto(S.done) } // nothing pending and nothing dropped, or the root itself is finished
       case None =>
-        when(stack.get.empty) { state := S.done }
+        when(stack.get.empty) { goto(S.done) }
           .otherwise {
             val top = stack.get.pop()
             cur := top.cref
-            when(!Fp.gt(f, top.t, tmax)) { state := S.issue }
+            when(!Fp.gt(f, top.t, tmax)) { goto(S.issue) }
           }
     }
   }
 
-  io.result.valid := state === S.done
+  io.result.valid := is(S.done)
   io.result.bits := best
   io.result.bits.overflow := overflow
   io.result.bits.readError := readError
@@ -222,7 +230,7 @@ class TraversalUnit(p: TuParams) extends Module {
     io.result.bits.prim := Mux(readError, code(Hits.ReadError), Mux(stepLimit, code(Hits.StepLimit), code(Hits.Overflow)))
     io.result.bits.u := 0.U; io.result.bits.v := 0.U
   }
-  when(io.result.fire) { state := S.idle }
+  when(io.result.fire) { goto(S.idle) }
 }
 
 object TraversalUnit {
