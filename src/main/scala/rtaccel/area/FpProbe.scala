@@ -31,7 +31,7 @@ object FpProbe {
   val divStages: Int = rtaccel.config.Presets.paper2017.divStages
 
   private def divider(s: Stager, f: FpFormat, a: Timed[UInt], b: Timed[UInt]): Timed[UInt] = {
-    val d = Module(new FpDivPipe(f, divStages, s.budget))
+    val d = Module(new FpDivPipe(f, divStages, s.budget, s.lutInputs))
     val in = s.align(Seq(a, b))
     d.io.in.valid := true.B
     d.io.in.bits.a := in(0).v

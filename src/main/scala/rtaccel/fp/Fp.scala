@@ -378,9 +378,18 @@ object Fp {
       o.zeroSign := (if (toPos.isDefined) Mux(sA === sB, sA, !tp) else sA && sB)
       o
     }
+    // Where LUTs have 4 inputs the difference's saturation has a segment of its own, cut from the shift at every
+    // budget: counted for 6-input LUTs the two are 5 levels, mapped to 4-input ones they were 10-11 (the deepest
+    // paths of the smallest platform on ECP5, in TriPipe's and BoxPipe's shared adders, docs/timing.md twenty-first
+    // round). Elsewhere the saturation stays in front of the shift.
+    val satApart = pipe.lutInputs < Depth.LutInputs && pipe.budget.isDefined
+    def saturate(d: UInt): UInt = Mux(gtConst(d, dMax), dMax.U, d)
+    val swSat = if (!satApart) sw else pipe.reg(pipe.step(sw, Depth.carry(f.expBits) + 1) { r =>
+      val o = WireInit(r); o.d := saturate(r.d); o
+    })
     // 2: align y; shifted-out bits are ORed into the LSB
-    val al = pipe.step(sw, Depth.carry(f.expBits) + Depth.shift(dMax) + 1) { r =>
-      val dSat = Mux(gtConst(r.d, dMax), dMax.U, r.d)
+    val al = pipe.step(swSat, (if (satApart) 0 else Depth.carry(f.expBits)) + Depth.shift(dMax) + 1) { r =>
+      val dSat = if (satApart) r.d else saturate(r.d)
       val yAligned = Cat(r.ySig, 0.U(g.W)) >> dSat
       // the bits shifted below the sticky position, by mask: bit i of ySig is lost when i + g < dSat (one LUT per
       // bit beside the shifter, whose low half then goes unused)

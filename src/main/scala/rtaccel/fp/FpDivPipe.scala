@@ -5,12 +5,13 @@ import chisel3.util._
 
 /** Fully pipelined divider: accepts one a/b per cycle, result `latency` cycles later, bit-identical to [[Fp.div]].
   * The divider is Fp.divPre, divSteps(f) non-restoring recurrence steps and Fp.divPost (round/pack).
+  * `lutInputs`: the family's LUT size (PipeParams.lutInputs), which a budget's placement and the rounding follow.
   * With a budget (PIPELINE=auto or <levels>), registers go wherever a path would pass `budget` LUT levels and the
   * result leaves from a register (a consumer in another module starts its own path there); without one, `stages`
   * register levels are spread over the chain by estimated delay (0 = combinational), the depths of before
   * pipelining was a parameter.
   */
-class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None) extends Module {
+class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None, lutInputs: Int = Depth.LutInputs) extends Module {
   require(stages >= 0, "stages must be >= 0")
   val io = IO(new Bundle {
     val in = Flipped(Valid(new Bundle {
@@ -21,14 +22,14 @@ class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None
   })
 
   private val steps = Fp.divSteps(f)
-  private val pipe = new Stager(budget)
+  private val pipe = new Stager(budget, lutInputs = lutInputs)
   private val (res, resValid, lat) = budget match {
     case Some(_) =>
       // the counts beside the exponent difference (two adders in a row, measured 7 levels for fp32 on xc5v)
       val counted = pipe.step(pipe.in(io.in.bits, FpDivPipe.inputDepth),
         (Depth.lzc(f.manBits + 1) max (2 * Depth.carry(f.expBits + 2) + 3)) + 1)(x => Fp.divPreCount(f, x.a, x.b))
       var st = pipe.step(counted, Depth.shift(f.manBits + 1) + 1)(Fp.divPreShift(f, _))
-      for (_ <- 1 to steps) st = pipe.step(st, FpDivPipe.stepLevels(f))(s => Fp.divStep(f, s))
+      for (_ <- 1 to steps) st = pipe.step(st, FpDivPipe.stepLevels(f, budget, lutInputs))(s => Fp.divStep(f, s))
       val out = pipe.reg(Fp.divPostT(pipe, f, st))
       (out.v, pipe.valid(io.in.valid, out.at), out.at)
     case None =>
@@ -62,6 +63,12 @@ object FpDivPipe {
     * docs/timing.md).
     */
   private[fp] def stepLevels(f: FpFormat): Int = Depth.carry(f.manBits + 3)
+  /** The same where LUTs have 4 inputs (ECP5), at most two steps a cycle: there a step's carry chain and the nets
+    * into and out of it took about 3 ns, and three steps at 7 levels (125 MHz) were the smallest platform's routed
+    * critical path (TriPipe's divider, 9.0 ns; docs/timing.md twenty-first round).
+    */
+  private[fp] def stepLevels(f: FpFormat, budget: Option[Int], lutInputs: Int): Int =
+    if (lutInputs < Depth.LutInputs) budget.fold(stepLevels(f))(b => stepLevels(f) max (b / 2)) else stepLevels(f)
 
   /** Register levels after each of the divSteps(f)+2 chain units; sums to `stages`. Cut j (1..stages) goes
     * after the unit whose cumulative delay is nearest to j/(stages+1) of the total, so the stages are balanced.

@@ -44,7 +44,7 @@ object PipeLatencies {
       case rtaccel.config.TriTest.Mt => val t = Module(new TriPipe(p)); (t.latency, t.census)
       case rtaccel.config.TriTest.Watertight => val t = Module(new WatertightPipe(p)); (t.latency, t.census)
     }
-    private val prep = Module(new FpDivPipe(FpFormat.fp32, p.divStages, p.stageBudget))
+    private val prep = Module(new FpDivPipe(FpFormat.fp32, p.divStages, p.stageBudget, p.lutInputs))
     val latencies: PipeLatencies = PipeLatencies(box.latency, tri, rtaccel.tc.TraversalController.prepLatency(prep.latency), Seq(box.census, triBits, prep.census))
   }
 }

@@ -82,7 +82,7 @@ class TriPipe(p: PipeParams) extends Module {
   private val Seq(det, ut, vt, tt) = fold.batch(firsts.zip(prods).map { case (f0, pr) => Seq(f0, pr(2)) })(x => stage(add(x(0), x(1))))
   private val uvt = Seq(ut, vt, tt)
   // 7..: inv = 1/det
-  private val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget))
+  private val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget, p.lutInputs))
   private val detIn = pipe.align(Seq(det, one)) // the divider reads its operands as they come
   div.io.in.valid := pipe.valid(io.in.valid, detIn(0).at)
   div.io.in.bits.a := detIn(1).v

@@ -93,7 +93,7 @@ class WatertightPipe(p: PipeParams) extends Module {
   }
 
   // 1/det (pipelined divider) beside T = (U*Az + V*Bz) + W*Cz
-  private val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget))
+  private val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget, p.lutInputs))
   private val detIn = pipe.align(Seq(det, one))
   div.io.in.valid := pipe.valid(io.in.valid, detIn(0).at)
   div.io.in.bits.a := detIn(1).v

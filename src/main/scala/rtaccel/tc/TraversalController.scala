@@ -33,7 +33,7 @@ class TraversalController(p: PlatformParams) extends Module {
   // less the rays in the divider and in the queue), kept in a register of its own so `ready` is a compare with zero:
   // summing the queue's count with an in-flight counter put an adder and a compare in front of every input's
   // handshake (the TC's routed critical path on ECP5).
-  val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget))
+  val div = Module(new FpDivPipe(f, p.divStages, p.stageBudget, p.pipes.lutInputs))
   /** Cycles from a ray's acceptance to its prepared copy (1/dz leaves the divider last). */
   val prepLatency: Int = TraversalController.prepLatency(div.latency)
   private val slots = prepLatency / TraversalController.axes + 2 // rays the divider can hold, and one waiting

@@ -17,7 +17,7 @@ class FpPipedHarness(f: FpFormat, budget: Int, dsp: DspShape = DspShape.Dsp48, l
   })
   private val pipe = new Stager(Some(budget), dsp, None, lutInputs)
   private val a = Timed(io.a, 0, 1); private val b = Timed(io.b, 0, 1)
-  private val div = Module(new FpDivPipe(f, 0, Some(budget)))
+  private val div = Module(new FpDivPipe(f, 0, Some(budget), lutInputs))
   div.io.in.valid := true.B; div.io.in.bits.a := io.a; div.io.in.bits.b := io.b
   private def sel(fn: (FpFormat, UInt, UInt) => UInt) = Fp.selT(pipe, f, a, b)(fn)
   private def cmp(fn: (FpFormat, UInt, UInt) => Bool) = Fp.cmpT(pipe, f, a, b)(fn).map(0)(_.asUInt)
