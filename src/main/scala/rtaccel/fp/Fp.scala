@@ -191,7 +191,7 @@ object Fp {
     // lowest), never the whole significand (docs/fp.md)
     val j = m + 3
     val lzLevels = Depth.lzc(if (maxLs >= n - 1) n else maxLs + 1)
-    val lut4 = pipe.lutInputs < Depth.LutInputs
+    val lut4 = pipe.smallLuts
     // 1: leading zeros and, beside them, the room left above exponent 1 and the right shift into the subnormal range
     val lzd0 = pipe.step(x, lzLevels max (Depth.carry(w) + 1)) { r =>
       val sig = if (n > n0) Cat(r.sig, 0.U((n - n0).W)) else r.sig
@@ -382,7 +382,7 @@ object Fp {
     // budget: counted for 6-input LUTs the two are 5 levels, mapped to 4-input ones they were 10-11 (the deepest
     // paths of the smallest platform on ECP5, in TriPipe's and BoxPipe's shared adders, docs/timing.md twenty-first
     // round). Elsewhere the saturation stays in front of the shift.
-    val satApart = pipe.lutInputs < Depth.LutInputs && pipe.budget.isDefined
+    val satApart = pipe.smallLuts && pipe.budget.isDefined
     def saturate(d: UInt): UInt = Mux(gtConst(d, dMax), dMax.U, d)
     val swSat = if (!satApart) sw else pipe.reg(pipe.step(sw, Depth.carry(f.expBits) + 1) { r =>
       val o = WireInit(r); o.d := saturate(r.d); o

@@ -29,7 +29,7 @@ class FpDivPipe(val f: FpFormat, val stages: Int, val budget: Option[Int] = None
       val counted = pipe.step(pipe.in(io.in.bits, FpDivPipe.inputDepth),
         (Depth.lzc(f.manBits + 1) max (2 * Depth.carry(f.expBits + 2) + 3)) + 1)(x => Fp.divPreCount(f, x.a, x.b))
       var st = pipe.step(counted, Depth.shift(f.manBits + 1) + 1)(Fp.divPreShift(f, _))
-      for (_ <- 1 to steps) st = pipe.step(st, FpDivPipe.stepLevels(f, budget, lutInputs))(s => Fp.divStep(f, s))
+      for (_ <- 1 to steps) st = pipe.step(st, FpDivPipe.stepLevels(f, pipe))(s => Fp.divStep(f, s))
       val out = pipe.reg(Fp.divPostT(pipe, f, st))
       (out.v, pipe.valid(io.in.valid, out.at), out.at)
     case None =>
@@ -67,8 +67,8 @@ object FpDivPipe {
     * into and out of it took about 3 ns, and three steps at 7 levels (125 MHz) were the smallest platform's routed
     * critical path (TriPipe's divider, 9.0 ns; docs/timing.md twenty-first round).
     */
-  private[fp] def stepLevels(f: FpFormat, budget: Option[Int], lutInputs: Int): Int =
-    if (lutInputs < Depth.LutInputs) budget.fold(stepLevels(f))(b => stepLevels(f) max (b / 2)) else stepLevels(f)
+  private[fp] def stepLevels(f: FpFormat, pipe: Stager): Int =
+    if (pipe.smallLuts) pipe.budget.fold(stepLevels(f))(b => stepLevels(f) max (b / 2)) else stepLevels(f)
 
   /** Register levels after each of the divSteps(f)+2 chain units; sums to `stages`. Cut j (1..stages) goes
     * after the unit whose cumulative delay is nearest to j/(stages+1) of the total, so the stages are balanced.

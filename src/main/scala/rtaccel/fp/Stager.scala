@@ -42,6 +42,9 @@ final class Stager(val budget: Option[Int], val dsp: DspShape = DspShape.Dsp48, 
   require(delayRam.forall(_ >= 2), s"a delay in LUT RAM takes at least 2 cycles (got ${delayRam.get})")
   require(budget.forall(_ >= 1), s"a pipeline budget must be at least 1 LUT level (got ${budget.get})")
   private var placed = Stager.Census()
+  /** The family's LUTs have fewer inputs than Depth counts for (ECP5's 4): the operators cut some segments apart that
+    * the counts would join (Fp.roundPackT, Fp.addCore, FpDivPipe.stepLevels). */
+  def smallLuts: Boolean = lutInputs < Depth.LutInputs
   /** The register bits this Stager has placed so far (a census for the cost model; synthesis may trim unused ones). */
   def census: Stager.Census = placed
   /** x delayed `cycles` by flip-flops beside a unit with registers of its own (a DSP tile), counted in the census. */
