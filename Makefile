@@ -210,11 +210,12 @@ area: deps yosys
 # the board top or UNIT=<module> in a shift-register wrapper; JSON last line, timing.json + nextpnr log in OUT
 # (default build/timing/<config>-<board>[-<unit>]); exit 3 when fmax < CLOCK_MHZ (else the board's clock) or the
 # design does not fit. Cached per circuit and seed in build/timing-cache. SPEED=6|7|8 overrides the part's grade;
-# TIMING_ROUTER=router2 routes with nextpnr's other router.
+# TIMING_ROUTER=router2 routes with nextpnr's other router; TIMING_PLACER=static|sa places with another placer.
 TIMING_SEEDS ?= 1
 timing: deps
 	@$(JAVA) rtaccel.cli.TimingCmd --config $(VCONFIG) $(PLATFORM_KNOBS) --seeds $(TIMING_SEEDS) \
-	  $(if $(UNIT),--unit $(UNIT)) $(if $(SPEED),--speed $(SPEED)) $(if $(TIMING_ROUTER),--router $(TIMING_ROUTER)) $(if $(OUT),--out $(OUT))
+	  $(if $(UNIT),--unit $(UNIT)) $(if $(SPEED),--speed $(SPEED)) $(if $(TIMING_ROUTER),--router $(TIMING_ROUTER)) \
+	  $(if $(TIMING_PLACER),--placer $(TIMING_PLACER)) $(if $(OUT),--out $(OUT))
 
 # The ecp5 rule of the timing proxy fitted to every route in build/timing-cache (docs/area.md "Routed timing"):
 # each route's proxy levels and routed clock against the fitted rule and the current one; WRITE=1 puts the fit

@@ -18,12 +18,18 @@ final case class Routed(result: ujson.Obj, dir: Path, cached: Boolean) {
   * the CLOCK_MHZ of a run: a result belongs to the circuit, and the verdict against a target is the caller's.
   */
 object Route {
-  final case class Job(files: Seq[Path], top: String, board: Board, part: Ecp5Part, speed: Int, seed: Int, router: String = DefaultRouter)
+  final case class Job(files: Seq[Path], top: String, board: Board, part: Ecp5Part, speed: Int, seed: Int, router: String = DefaultRouter,
+                       placer: String = DefaultPlacer)
 
   /** nextpnr-ecp5's routers (TIMING_ROUTER=): router1, its default and the one every route in docs/timing.md used, and
     * router2, which routes congested designs in other ways (a different negotiation of overused wires). */
   val Routers: Seq[String] = Seq("router1", "router2")
   val DefaultRouter: String = Routers.head
+  /** nextpnr-ecp5's placers (TIMING_PLACER=): heap, its default and the placer of every route in docs/timing.md before
+    * the twenty-second round, analytic with timing-driven net weights; static, an electrostatic placer that spreads
+    * cells by density; sa, simulated annealing (slow on designs of tens of thousands of cells). */
+  val Placers: Seq[String] = Seq("heap", "static", "sa")
+  val DefaultPlacer: String = Placers.head
 
   val resultFile = "result.json"
   val reportFile = "nextpnr-report.json"
@@ -47,7 +53,8 @@ object Route {
     "--json", netlist, "--lpf-allow-unconstrained", "--timing-allow-fail", "--freq", f"${j.board.clockMhz}%.3f",
     "--seed", j.seed.toString, "--threads", "1", "--report", reportFile, "-l", pnrLog, "-q") ++
     // named only when not nextpnr's default, so that the routes cached before the choice existed keep their keys
-    (if (j.router == DefaultRouter) Nil else Seq("--router", j.router))
+    (if (j.router == DefaultRouter) Nil else Seq("--router", j.router)) ++
+    (if (j.placer == DefaultPlacer) Nil else Seq("--placer", j.placer))
 
   private def wrapper(j: Job): (String, Int) = {
     val f = j.files.find(_.getFileName.toString == s"${j.top}.sv").getOrElse(throw new InputError(s"no file ${j.top}.sv among the emitted Verilog"))

@@ -54,6 +54,7 @@ object Flags {
     f("cache", "routing cache folder (default build/timing-cache)"),
     f("seeds", "nextpnr seeds 1..N, the median run reported (TIMING_SEEDS=, default 1)"),
     f("router", "nextpnr's router: router1 (its default) or router2 (TIMING_ROUTER=)"),
+    f("placer", "nextpnr's placer: heap (its default), static or sa (TIMING_PLACER=)"),
     f("speed", "ECP5 speed grade 6, 7 or 8 (SPEED=; default the board's)"))
   val timingFit: Seq[Flag] = Seq(f("cache", "routing cache folder (default build/timing-cache)"),
     f("write", "1: write the fitted ecp5 rule into boards/timing.json (WRITE=1)"),

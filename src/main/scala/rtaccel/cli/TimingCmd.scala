@@ -28,6 +28,8 @@ object TimingCmd {
     if (seeds < 1 || seeds > 32) throw new InputError(s"TIMING_SEEDS=$seeds: give 1..32 seeds")
     val router = a.get("router", Route.DefaultRouter)
     if (!Route.Routers.contains(router)) throw new InputError(s"TIMING_ROUTER=$router: give ${Route.Routers.mkString(" or ")}")
+    val placer = a.get("placer", Route.DefaultPlacer)
+    if (!Route.Placers.contains(placer)) throw new InputError(s"TIMING_PLACER=$placer: give ${Route.Placers.mkString(", ")}")
     val speed = a.int("speed", part.speedGrade)
     // nextpnr knows -6, -7 and -8 for LFE5U / LFE5UM parts and -8 alone for the 5G parts (their only grade)
     val grades = if (part.device.startsWith("um5g")) Set(8) else Set(6, 7, 8)
@@ -49,7 +51,7 @@ object TimingCmd {
       val modules = files.map(_.getFileName.toString.stripSuffix(".sv")).toSet
       if (!modules(unit))
         throw new InputError(s"UNIT=$unit is not a module of config '${p.name}'; choose one of ${modules.toSeq.sorted.mkString(", ")}")
-      (1 to seeds).map(s => Route.run(Route.Job(files, unit, board, part, speed, s, router), cache, s"$unit of '${p.name}'", say))
+      (1 to seeds).map(s => Route.run(Route.Job(files, unit, board, part, speed, s, router, placer), cache, s"$unit of '${p.name}'", say))
     } finally Files.walk(rtl).toArray.map(_.asInstanceOf[Path]).sortBy(-_.getNameCount).foreach(Files.delete)
 
     // the median run (the lower of the middle two for an even count): a real run whose path is reported whole
@@ -70,6 +72,7 @@ object TimingCmd {
     j("seeds") = seeds; j("fmax_mhz_seeds") = ujson.Arr.from(runs.map(x => x.result("fmax_mhz")))
     j("fmax_reported") = if (seeds > 1) "median" else "the one seed"
     j("part") = board.part; j("device") = part.device; j("package") = part.pkg; j("speed_grade") = speed; j("router") = router
+    j("placer") = placer
     for (k <- Seq("yosys_version", "nextpnr_version", "synth_s", "synth_cached", "pnr_s")) j(k) = r.value.getOrElse(k, ujson.Null)
     j("cached") = runs.forall(_.cached); j("cache") = shown.dir.toString
     j("wall_s") = (System.nanoTime() - t0) / 1e9; j("rtaccel") = Cli.version

@@ -80,6 +80,19 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(j1("router").str == "router1" && j1("cache").str != j("cache").str, j1.toString)
   }
 
+  test("TIMING_PLACER=static: the same synthesis placed by nextpnr's electrostatic placer, a route of its own in the cache") {
+    assume(hasTools, "yowasp tools absent from .venv: make test installs them (make deps)")
+    val (code, out, err) = timing("--unit", "BurstSplitter", "--placer", "static")
+    assert(code == 0 || code == 3, err)
+    val j = last(out)
+    assert(j("placer").str == "static" && j("router").str == "router1" && j("fmax_mhz").num > 0 && !j("cached").bool, j.toString)
+    val log = Files.readString(Paths.get(j("cache").str).resolve("nextpnr.log"))
+    assert(log.contains("Running Static placer"), log.linesIterator.filter(_.contains("lacer")).mkString("\n"))
+    val (_, out1, _) = timing("--unit", "BurstSplitter")
+    val j1 = last(out1)
+    assert(j1("placer").str == "heap" && j1("cache").str != j("cache").str, j1.toString)
+  }
+
   test("nextpnr's utilisation lines: the first cell type over its capacity when placement ran out of room, else none") {
     val log = Files.createTempFile("nextpnr", ".log")
     val use = "Info: Device utilisation:\nInfo: \t              DP16KD:      36/    208    17%\n" +
@@ -139,8 +152,10 @@ class TimingSpec extends AnyFunSuite with org.scalatest.BeforeAndAfterAll {
     assert(c3 == 2 && e3.contains("SPEED=6") && e3.contains("speed grade 8 only"), e3)
     val (c4, o4, e4) = timing("--unit", "BurstSplitter", "--router", "router3")
     assert(c4 == 2 && o4.isEmpty && e4.contains("TIMING_ROUTER=router3: give router1 or router2"), e4)
+    val (c5, o5, e5) = timing("--unit", "BurstSplitter", "--placer", "annealing")
+    assert(c5 == 2 && o5.isEmpty && e5.contains("TIMING_PLACER=annealing: give heap, static, sa"), e5)
     for (x <- Seq(Seq("--unit", "BurstSplitter", "--board", "xc7k325t"), Seq("--unit", "NoSuchUnit"), Seq("--unit", "BurstSplitter", "--speed", "6"),
-        Seq("--unit", "BurstSplitter", "--router", "router3")))
+        Seq("--unit", "BurstSplitter", "--router", "router3"), Seq("--unit", "BurstSplitter", "--placer", "annealing")))
       assert(!Files.exists(dir.resolve(s"o${x.hashCode}")))
   }
 
