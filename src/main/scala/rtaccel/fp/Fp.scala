@@ -366,8 +366,14 @@ object Fp {
       val o = Wire(new AddSwap(f))
       o.xSign := Mux(swap, sB, sA)
       o.xExp := Mux(swap, ub.exp, ua.exp)
-      // (unpipelined, one subtract after the swap: ABC maps that smaller, 406 against 454 LUTs on xc7)
-      o.d := (if (pipe.budget.isDefined) Mux(swap, ub.exp - ua.exp, ua.exp - ub.exp) else o.xExp - Mux(swap, ua.exp, ub.exp))
+      // Pipelined, the difference both ways. Chosen by the swap, Yosys shares the two subtracts behind the mux
+      // (opt_share), so the 31-bit magnitude compare runs into an exponent subtract in the same cycle: TriPipe's
+      // routed critical path on ECP5 at 150 MHz (docs/timing.md, twenty-second round). Where LUTs have 4 inputs the
+      // exponents' own compare chooses: they differ exactly where the swap follows them, and where they are equal
+      // either way gives 0. On xc7 that maps to 5-6 LUTs more and nothing is routed, so the swap chooses there.
+      // Unpipelined, one subtract after the swap: ABC maps that smaller (406 against 454 LUTs on xc7)
+      o.d := (if (pipe.budget.isEmpty) o.xExp - Mux(swap, ua.exp, ub.exp)
+        else Mux(if (pipe.smallLuts) ub.exp > ua.exp else swap, ub.exp - ua.exp, ua.exp - ub.exp))
       o.xSig := Mux(swap, ub.sig, ua.sig)
       o.ySig := Mux(swap, ua.sig, ub.sig)
       o.effSub := sA =/= sB
