@@ -130,11 +130,15 @@ object Throughput {
     def slices(cached: Boolean) = p.accessSliceCycles + (if (cached) p.cacheSliceCycles else p.passSliceCycles)
     val overhead = nodeOverhead + primOverhead + (boxExtra + slices(s.nodeCache.isDefined)).toDouble * s.nodeAccesses +
       (triExtra + p.tuLeafCycles + slices(s.primCache.isDefined)).toDouble * s.leafAccesses
-    val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n
+    // PRIM_FORMAT=packed with TRI_II=k: the LeafAssembler lets a record out every k cycles at most, so the primitive
+    // port takes k cycles a primitive where its beats take fewer (slot64's TRI_II is at most its beats)
+    val primBeatsOnly = s.primBytesAll / beatBytes / n
+    val primBeats = if (p.primPacked) math.max(primBeatsOnly, p.triInterval.toDouble * s.primTests / n) else primBeatsOnly
+    val latency = (nodeMisses * lat + leafMisses * lat + (s.nodeDramBytes + s.primDramBytes) / bpc + hitBytes / beatBytes + overhead) / n +
+      (primBeats - primBeatsOnly)
     val dram = (s.nodeDramBytes + s.primDramBytes) / bpc / n
     val nodeBeats = s.nodeAccesses * p.nodeAccessBytes / beatBytes / n
-    val primBeats = s.primBytesAll / beatBytes / n
-    val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primBytesAll) / beatBytes / n
+    val beats = (s.nodeAccesses * p.nodeAccessBytes + s.primBytesAll) / beatBytes / n + (primBeats - primBeatsOnly)
     val delay = math.max(0.0, latency - dram - beats)
     // a lone hit: the path's overhead (every access of a cached path pays it) and its beats from the cache
     // (hits given, not derived from accesses - misses: the request-order stream keeps its old arithmetic bit for bit)

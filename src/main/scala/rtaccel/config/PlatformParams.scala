@@ -240,12 +240,11 @@ final case class PlatformParams(
   val primBits: Int = 9 * 32
   val primStrideBytes: Int = 64
   // the IU's collection hands the pipe a primitive once all its beats are in: one per primStrideBytes / beat cycles
-  // at most (packed leaves' records span beats unevenly: no such bound)
+  // at most. Packed leaves' records span beats unevenly; the LeafAssembler spaces them TRI_II cycles apart itself
   private def primBeats = math.max(1, primStrideBytes * 8 / axiDataBits)
-  require(triInterval == 1 || (!primPacked && primBeats >= triInterval),
-    s"TRI_II=$triInterval needs a primitive to take at least $triInterval memory beats (it takes " +
-      (if (primPacked) "fewer with PRIM_FORMAT=packed" else s"$primBeats at a $axiDataBits-bit bus") +
-      s"); use TRI_II=${if (primPacked) 1 else primBeats}" + (if (primPacked) " or PRIM_FORMAT=slot64" else ""))
+  require(triInterval == 1 || primPacked || primBeats >= triInterval,
+    s"TRI_II=$triInterval needs a primitive to take at least $triInterval memory beats (it takes $primBeats at a " +
+      s"$axiDataBits-bit bus); use TRI_II=$primBeats or PRIM_FORMAT=packed")
   /** Bytes a node occupies in NODE_FORMAT: the full node's slot, or the quantized node (bvh.Quantize) rounded up to
     * a power of two (M=4, q8: 64 B). The stride of the node array in memory, the node fetch's beats and a node
     * cache line of the RTL.

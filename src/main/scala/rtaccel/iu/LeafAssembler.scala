@@ -37,6 +37,11 @@ class LeafBeat(p: LeafParams, beatBits: Int) extends Bundle {
   * The leaf's job is queued on its first beat and leaves with its last record, so that a leaf's beats may be
   * taken while earlier leaves still drain. `in` is refused only while the buffer lacks room for a whole beat;
   * the output never waits (the triangle pipes never stall).
+  *
+  * TRI_II=k: the triangle pipe takes a record every k cycles at most, so a record leaves at least k cycles after the
+  * one before it. Records may complete closer together than that (a 256-bit beat holds 0.8 of one: two can complete
+  * in consecutive cycles), so the buffer holds them and refuses beats while full: a record in `cap` slots always
+  * leaves within k cycles, and the buffer always takes a beat while it holds less than a record.
   */
 class LeafAssembler(p: LeafParams, beatBits: Int) extends Module {
   val io = IO(new Bundle {
@@ -74,8 +79,14 @@ class LeafAssembler(p: LeafParams, beatBits: Int) extends Module {
   val finalBeat = beatIdx === lastBeat
   val valid = Mux(finalBeat, finalWords, bw.U)
 
-  // ---- output side: a whole record at the front of the buffer
-  val outFire = n >= rec.U
+  // ---- output side: a whole record at the front of the buffer, at least `ii` cycles after the one before it
+  private val ii = p.pipes.triInterval
+  val spaced = if (ii == 1) true.B else {
+    val wait = RegInit(0.U(log2Ceil(ii).W)) // cycles still to wait before the next record may leave
+    when(n >= rec.U && wait === 0.U) { wait := (ii - 1).U }.elsewhen(wait =/= 0.U) { wait := wait - 1.U }
+    wait === 0.U
+  }
+  val outFire = n >= rec.U && spaced
   val nAfter = Mux(outFire, n - rec.U, n)
   val firstBeat = beatIdx === 0.U
   io.in.ready := nAfter +& bw.U <= cap.U && (!firstBeat || jobs.io.enq.ready)

@@ -30,10 +30,10 @@ object Roofline {
   }
   def iuRates(p: PlatformParams): IuRates = {
     val g = McGeometry(p, AxiParams.of(p))
-    // PRIM_FORMAT=packed: the LeafAssembler cuts one 40 B record per cycle out of the beats, so a primitive costs
-    // its share of beats but at least a cycle; the padding of a leaf's last beat is left out, which keeps the
-    // bound a ceiling (the RTL can only be slower)
-    val prim = if (p.primPacked) math.max(1.0, rtaccel.config.Numerics.packedPrimBytes.toDouble / AxiParams.of(p).beatBytes)
+    // PRIM_FORMAT=packed: the LeafAssembler cuts one 40 B record per TRI_II cycles out of the beats, so a primitive
+    // costs its share of beats but at least TRI_II cycles; the padding of a leaf's last beat is left out, which keeps
+    // the bound a ceiling (the RTL can only be slower). slot64's TRI_II is at most its beats
+    val prim = if (p.primPacked) math.max(p.triInterval.toDouble, rtaccel.config.Numerics.packedPrimBytes.toDouble / AxiParams.of(p).beatBytes)
       else g.primBeats.toDouble
     IuRates(g.nodeBeats, prim)
   }

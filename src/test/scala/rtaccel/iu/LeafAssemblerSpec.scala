@@ -23,6 +23,7 @@ class LeafAssemblerBench(p: PlatformParams, beatBits: Int, stimHex: String, beat
     val mismatches = Output(UInt(32.W))
     val firstBad = Output(UInt(32.W))
     val refused = Output(UInt(32.W))
+    val close = Output(UInt(32.W)) // records that left fewer than TRI_II cycles after the one before
   })
   val dut = Module(new LeafAssembler(p.leaves, beatBits))
   val stim = Mem(beats, UInt((beatBits + 1 + 4 + 2 + 32).W)); loadMemoryFromFileInline(stim, stimHex)
@@ -54,8 +55,13 @@ class LeafAssemblerBench(p: PlatformParams, beatBits: Int, stimHex: String, beat
     r := r + 1.U
     when(!same) { bad := bad + 1.U; when(bad === 0.U) { firstBad := r } }
   }
+  // TRI_II: cycles since the last record (saturating), counted independently of the assembler's own wait
+  val ii = p.triInterval
+  val since = RegInit(ii.U(8.W)); val close = RegInit(0.U(32.W))
+  since := Mux(dut.io.out.valid, 1.U, Mux(since === ii.U, since, since + 1.U))
+  when(dut.io.out.valid && since < ii.U) { close := close + 1.U }
   io.done := i === beats.U && r === records.U
-  io.seen := r; io.mismatches := bad; io.firstBad := firstBad; io.refused := refused
+  io.seen := r; io.mismatches := bad; io.firstBad := firstBad; io.refused := refused; io.close := close
 }
 
 /** PRIM_FORMAT=packed: the LeafAssembler's records against a plain cut of the word stream, raw bits, on every bus
@@ -87,10 +93,12 @@ class LeafAssemblerSpec extends AnyFunSuite with ChiselScalatestTester {
   // make test: the 512-bit bus (a beat holds more than a record: the only width where the assembler refuses beats;
   // the platform's 256-bit one runs packed leaves in PlatformSpec); make regress adds 64, 128 and 256 bits (a record
   // across up to 5 beats)
+  // TRI_II=k: records at least k cycles apart (make test: the 256-bit bus at 2, where records complete up to a cycle
+  // apart; make regress: every bus at 3)
   private val regress = rtaccel.Regress.full
-  for (bw <- if (regress) Seq(2, 4, 8, 16) else Seq(16)) {
+  for ((bw, ii) <- if (regress) Seq(2, 4, 8, 16).flatMap(b => Seq(b -> 1, b -> 3)) else Seq(16 -> 1, 8 -> 2)) {
     val randomLeaves = 20000
-    test(s"${32 * bw}-bit beats: directed leaves (1..16 primitives, an error beat mid-leaf, back to back and with gaps) and $randomLeaves random leaves, bit for bit") {
+    test(s"${32 * bw}-bit beats${if (ii > 1) s", TRI_II=$ii" else ""}: directed leaves (1..16 primitives, an error beat mid-leaf, back to back and with gaps) and $randomLeaves random leaves, bit for bit") {
       val rnd = new Random(bw)
       var tag = 0
       def next(count: Int, errs: Set[Int] = Set()): Leaf = { tag += 1; leaf(rnd, count, tag, bw, 0).copy(errBeats = errs) }
@@ -106,22 +114,23 @@ class LeafAssemblerSpec extends AnyFunSuite with ChiselScalatestTester {
           (BigInt(gap()) << (32 * bw + 5)) | (BigInt(l.tag) << (32 * bw + 7))
       }) }
       val want = phases.flatMap(_._1.flatMap(expected(_, bw)))
-      val dir = Paths.get(s"build/test-leaf-assembler/bus${32 * bw}").toAbsolutePath; Files.createDirectories(dir)
+      val dir = Paths.get(s"build/test-leaf-assembler/bus${32 * bw}-ii$ii").toAbsolutePath; Files.createDirectories(dir)
       hexLines(dir.resolve("stim.hex"), (32 * bw + 39 + 3) / 4, stim)
       hexLines(dir.resolve("exp.hex"), (354 + 3) / 4, want.map { case (w, err, last, t) =>
         w.zipWithIndex.map { case (x, k) => BigInt(x) << (32 * k) }.sum | (BigInt(if (err) 1 else 0) << 320) |
           (BigInt(if (last) 1 else 0) << 321) | (BigInt(t) << 322) })
-      val p = PlatformParams(tus = 4, mppl = 4, axiDataBits = 32 * bw, primPacked = true)
+      val p = PlatformParams(tus = 4, mppl = 4, axiDataBits = 32 * bw, primPacked = true, triInterval = ii)
       test(new LeafAssemblerBench(p, 32 * bw, dir.resolve("stim.hex").toString, stim.length, dir.resolve("exp.hex").toString, want.length))
         .withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
           dut.clock.setTimeout(0)
           var cycles = 0L
-          while (!dut.io.done.peek().litToBoolean && cycles < 4L * stim.length + 1000) { dut.clock.step(1000); cycles += 1000 }
+          while (!dut.io.done.peek().litToBoolean && cycles < 4L * ii * stim.length + 1000) { dut.clock.step(1000); cycles += 1000 }
           dut.clock.step(16) // a record beyond the expected ones would count as a mismatch
           val seen = dut.io.seen.peek().litValue; val bad = dut.io.mismatches.peek().litValue
           assert(dut.io.done.peek().litToBoolean, s"stuck after $seen of ${want.length} records")
           assert(bad == 0 && seen == want.length, s"$bad of $seen records differ, the first is record ${dut.io.firstBad.peek().litValue}: " +
             s"${want.lift(dut.io.firstBad.peek().litValue.toInt)}")
+          assert(dut.io.close.peek().litValue == 0, s"${dut.io.close.peek().litValue} records left fewer than TRI_II=$ii cycles after the one before")
           info(s"${phases.map(_._1.length).sum} leaves, ${want.length} records, ${stim.length} beats, " +
             s"${want.count(_._2)} bad records, ${dut.io.refused.peek().litValue} beats refused, about $cycles cycles")
         }

@@ -293,19 +293,21 @@ class PlatformSpec extends AnyFunSuite {
     }
 
   // Every format at once in one circuit (make test's case of each): bf16 boxes, the watertight test and its slack,
-  // q8 nodes through NodeDecode, packed leaves through LeafAssembler, both caches, DRAM jitter and host backpressure.
+  // q8 nodes through NodeDecode, packed leaves through LeafAssembler, both caches, DRAM jitter and host backpressure,
+  // at TRI_II=BOX_II=2 (the LeafAssembler spaces its records two cycles apart; the pipes assert the spacing).
   // make test: its DRAM poisons beats, transient (every error is re-read clean, so each ray equals the fault-free
   // model and the comparisons below hold) then sticky on the same build (exactly the model's rays flagged, the leaf
   // bytes of the faulty model); make regress: fault-free here and the errors on their own above
   private val formatTus = if (full) 8 else 4
-  test(s"all formats in one circuit (bf16, watertight, q8, packed) at $formatTus TUs with both caches: bit-exact, counts equal the model${if (full) "" else "; memory read errors, transient and sticky"}") {
+  test(s"all formats in one circuit (bf16, watertight, q8, packed; TRI_II=BOX_II=2) at $formatTus TUs with both caches: bit-exact, counts equal the model${if (full) "" else "; memory read errors, transient and sticky"}") {
     val (rate, seed) = if (full) (0.0, 1) else (errorRate, errorSeed)
     val params = Presets.paper2017.copy(tus = formatTus, boxFormat = rtaccel.fp.FpFormat.parse("bf16"), triTest = TriTest.Watertight,
-      primPacked = true, nodeQuantBits = 8)
+      primPacked = true, nodeQuantBits = 8, triInterval = 2, boxInterval = 2)
     def formats(mode: String) = runOne(formatTus, 4, 4, rays, scene, jitter = 29, stall = 30,
       node = CacheParams(64, 2, CachePolicy.Lru), prim = CacheParams(32, 2, CachePolicy.Lru), box = params.boxFormat,
-      tri = params.triTest, packed = true, nodeQuant = 8, errorRate = rate, seed = seed, errorMode = mode)
+      tri = params.triTest, packed = true, nodeQuant = 8, errorRate = rate, seed = seed, errorMode = mode, ii = 2)
     val r = formats(MemFaults.Transient)
+    assert(r.json("tri_ii").num == 2 && r.json("box_ii").num == 2)
     val n = r.json("numerics")
     assert(n("box_format").str == "bf16" && n("tri_test").str == "watertight" && n("node_format").str == "q8" &&
       n("prim_format").str == "packed", ujson.write(n))
