@@ -52,6 +52,17 @@ class ThroughputSpec extends AnyFunSuite {
     val (l1, l2) = (rtaccel.iu.PipeLatencies.of(p), rtaccel.iu.PipeLatencies.of(shared))
     assert(l2.box > l1.box && l2.tri > l1.tri)
     assert(Throughput.predict(shared, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * (l2.box - l1.box) + (l2.tri - l1.tri))
+    // packed leaves: 2 rays x one 3-primitive leaf of 128 B (120 B of records padded to 4 beats); at TRI_II=2 the
+    // LeafAssembler takes 6 cycles for its 3 records, which the port's demand and each leaf's latency take instead of
+    // the 4 beats (and the triangle pipe's shared operators their extra cycles)
+    def packedSink = { val s = new CacheSink(None, None, 128, c => (c * 40L + 31) / 32 * 32); for (r <- 0 until 2) { s.node(r, 0, 0); s.leaf(r, 0, 3, 2) }; s.counts }
+    val pk = p.copy(primPacked = true)
+    val (one, two) = (Throughput.predict(pk, packedSink, rays = 2, tus = 1), Throughput.predict(pk.copy(triInterval = 2), packedSink, rays = 2, tus = 1))
+    assert(one.beatCycles == (128 + 128) / 32.0 && two.beatCycles == 128 / 32.0 + 6.0, s"${one.beatCycles} ${two.beatCycles}")
+    val triExtra = rtaccel.iu.PipeLatencies.of(pk.copy(triInterval = 2)).tri - rtaccel.iu.PipeLatencies.of(pk).tri
+    assert(two.latencyCycles - one.latencyCycles == (6.0 - 4.0) + triExtra, s"${two.latencyCycles} ${one.latencyCycles} $triExtra")
+    // slot64 at TRI_II=2: two beats a primitive already, nothing but the pipe's latency moves
+    assert(Throughput.predict(p.copy(triInterval = 2), sink(cached = false), rays = 2, tus = 1).beatCycles == u.beatCycles)
     // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:
     // (2 x 232 - 2 x 72 + 2 x 4 + 4 x path) / 2, by hand for two path latencies
     for ((path, expect) <- Seq(8.0 -> 180.0, 5.0 -> 174.0)) {

@@ -19,6 +19,9 @@ class RooflineSpec extends AnyFunSuite {
     assert(Roofline.iuRates(p.copy(primPacked = true)) == Roofline.IuRates(4, 1.25))
     assert(Roofline.iuRates(p.copy(primPacked = true, axiDataBits = 512)) == Roofline.IuRates(2, 1.0))
     assert(Roofline.iuRates(p.copy(primPacked = true, axiDataBits = 64)) == Roofline.IuRates(16, 5.0))
+    // TRI_II=k with packed leaves: the LeafAssembler lets a record out every k cycles, whatever its beats
+    assert(Roofline.iuRates(p.copy(primPacked = true, triInterval = 2)) == Roofline.IuRates(4, 2.0))
+    assert(Roofline.iuRates(p.copy(primPacked = true, triInterval = 3, axiDataBits = 64)) == Roofline.IuRates(16, 5.0))
     assert(Roofline.iuRates(p.copy(nodeQuantBits = 8)) == Roofline.IuRates(2, 2))
     assert(Roofline.iuRates(p).nodesPerCycle == 0.25 && Roofline.iuRates(p).primsPerCycle == 0.5)
   }
