@@ -330,6 +330,19 @@ object Fp {
     val sp = new Special // nan and inf; `zero` is decided by the sum, `sign` is the sign of an infinity
     val zeroSign = Bool()
   }
+  /** addCore's first segment where LUTs have 4 inputs: the magnitude compare's answer (`swap`: b is the larger) and
+    * the operands as they came, swapped in the next segment (see addCore). */
+  class AddCmp(f: FpFormat) extends Bundle {
+    val swap = Bool()
+    val xSign = Bool()
+    val expA = UInt(f.expBits.W); val expB = UInt(f.expBits.W)
+    val sigA = UInt((f.manBits + 1).W); val sigB = UInt((f.manBits + 1).W)
+    val d = UInt(f.expBits.W)
+    val effSub = Bool()
+    val toPos = Bool()
+    val sp = new Special
+    val zeroSign = Bool()
+  }
   /** addCore after aligning y: both with three extra bits (guard, round, sticky) and a carry bit on top. */
   class AddAligned(f: FpFormat) extends Bundle {
     val xSign = Bool()
@@ -356,43 +369,63 @@ object Fp {
     // (and the exponent difference both ways beside the compare: the swap picks one. In the align step the
     // difference, its saturation and the shifter were one path, TriPipe's routed critical path on ECP5; the
     // saturation stays there: here it made this step deeper than its budget)
-    val sw = pipe.op(ins, Depth.carry(f.width - 1) + 1) { v =>
-      val ua = new Unpacked(f, v(0))
-      val ub = new Unpacked(f, v(1))
-      val sA = ua.sign
-      val sB = if (negB) !ub.sign else ub.sign
-      val swap = ub.mag > ua.mag
-      // x's exponent is at least y's, so the difference taken the chosen way never wraps
-      val o = Wire(new AddSwap(f))
-      o.xSign := Mux(swap, sB, sA)
-      o.xExp := Mux(swap, ub.exp, ua.exp)
-      // Pipelined, the difference both ways. Chosen by the swap, Yosys shares the two subtracts behind the mux
-      // (opt_share), so the 31-bit magnitude compare runs into an exponent subtract in the same cycle: TriPipe's
-      // routed critical path on ECP5 at 150 MHz (docs/timing.md, twenty-second round). Where LUTs have 4 inputs the
-      // exponents' own compare chooses: they differ exactly where the swap follows them, and where they are equal
-      // either way gives 0. On xc7 that maps to 5-6 LUTs more and nothing is routed, so the swap chooses there.
-      // Unpipelined, one subtract after the swap: ABC maps that smaller (406 against 454 LUTs on xc7)
-      o.d := (if (pipe.budget.isEmpty) o.xExp - Mux(swap, ua.exp, ub.exp)
-        else Mux(if (pipe.smallLuts) ub.exp > ua.exp else swap, ub.exp - ua.exp, ua.exp - ub.exp))
-      o.xSig := Mux(swap, ub.sig, ua.sig)
-      o.ySig := Mux(swap, ua.sig, ub.sig)
-      o.effSub := sA =/= sB
-      val tp = if (toPos.isDefined) v(2)(0) else false.B
-      o.toPos := tp
-      o.sp := special(ua.isNaN || ub.isNaN || (ua.isInf && ub.isInf && o.effSub), ua.isInf || ub.isInf, false.B, Mux(ua.isInf, sA, sB))
-      // exact zero: -0 only for (-0) + (-0), or (IEEE) a cancellation rounded toward -inf
-      o.zeroSign := (if (toPos.isDefined) Mux(sA === sB, sA, !tp) else sA && sB)
-      o
-    }
-    // Where LUTs have 4 inputs the difference's saturation has a segment of its own, cut from the shift at every
-    // budget: counted for 6-input LUTs the two are 5 levels, mapped to 4-input ones they were 10-11 (the deepest
-    // paths of the smallest platform on ECP5, in TriPipe's and BoxPipe's shared adders, docs/timing.md twenty-first
-    // round). Elsewhere the saturation stays in front of the shift.
+    // Where LUTs have 4 inputs the swap's muxes (the operands' 50-odd bits) go in the segment after the compare, with
+    // the difference's saturation, so the Stager can put a register between the compare and them: ABC maps the 31-bit
+    // compare into four LUT4 levels, and with the muxes behind it that segment was TriPipe's routed critical path on
+    // ECP5 at 150 MHz (an operand bit -> the compare -> the smaller significand's register, 5 elements, 5.7 ns of
+    // routing; docs/timing.md twenty-second round). The saturation has a segment of its own there anyway: counted
+    // for 6-input LUTs it and the shift are 5 levels, mapped to 4-input ones they were 10-11 (the deepest paths of
+    // the smallest platform on ECP5, in TriPipe's and BoxPipe's shared adders, twenty-first round). Elsewhere the
+    // compare and the muxes are one segment and the saturation stays in front of the shift.
     val satApart = pipe.smallLuts && pipe.budget.isDefined
     def saturate(d: UInt): UInt = Mux(gtConst(d, dMax), dMax.U, d)
-    val swSat = if (!satApart) sw else pipe.reg(pipe.step(sw, Depth.carry(f.expBits) + 1) { r =>
-      val o = WireInit(r); o.d := saturate(r.d); o
-    })
+    // the operands' classes and the sum's sign rules, common to both layouts
+    final case class Ops(ua: Unpacked, ub: Unpacked, sA: Bool, sB: Bool, swap: Bool, tp: Bool) {
+      val effSub: Bool = sA =/= sB
+      def sp: Special = special(ua.isNaN || ub.isNaN || (ua.isInf && ub.isInf && effSub), ua.isInf || ub.isInf, false.B, Mux(ua.isInf, sA, sB))
+      // exact zero: -0 only for (-0) + (-0), or (IEEE) a cancellation rounded toward -inf
+      def zeroSign: Bool = if (toPos.isDefined) Mux(sA === sB, sA, !tp) else sA && sB
+    }
+    def ops(v: Seq[UInt]): Ops = {
+      val ua = new Unpacked(f, v(0))
+      val ub = new Unpacked(f, v(1))
+      Ops(ua, ub, ua.sign, if (negB) !ub.sign else ub.sign, ub.mag > ua.mag, if (toPos.isDefined) v(2)(0) else false.B)
+    }
+    val swSat = if (satApart) {
+      // the exponents' own compare chooses the difference: they differ exactly where the swap follows them, and where
+      // they are equal either way gives 0 (chosen by the swap, Yosys' opt_share turns the two subtracts into one of
+      // swapped operands behind the compare: the magnitude compare then ran into a subtract, TriPipe's routed path)
+      val cmp = pipe.op(ins, Depth.carry(f.width - 1) + 2) { v =>
+        val x = ops(v)
+        val o = Wire(new AddCmp(f))
+        o.swap := x.swap; o.xSign := Mux(x.swap, x.sB, x.sA)
+        o.expA := x.ua.exp; o.expB := x.ub.exp; o.sigA := x.ua.sig; o.sigB := x.ub.sig
+        o.d := Mux(x.ub.exp > x.ua.exp, x.ub.exp - x.ua.exp, x.ua.exp - x.ub.exp)
+        o.effSub := x.effSub; o.toPos := x.tp; o.sp := x.sp; o.zeroSign := x.zeroSign
+        o
+      }
+      pipe.reg(pipe.step(cmp, 1 + Depth.carry(f.expBits) + 1) { r =>
+        val o = Wire(new AddSwap(f))
+        o.xSign := r.xSign; o.xExp := Mux(r.swap, r.expB, r.expA)
+        o.xSig := Mux(r.swap, r.sigB, r.sigA); o.ySig := Mux(r.swap, r.sigA, r.sigB)
+        o.d := saturate(r.d)
+        o.effSub := r.effSub; o.toPos := r.toPos; o.sp := r.sp; o.zeroSign := r.zeroSign
+        o
+      })
+    } else pipe.op(ins, Depth.carry(f.width - 1) + 1) { v =>
+      val x = ops(v)
+      // x's exponent is at least y's, so the difference taken the chosen way never wraps
+      val o = Wire(new AddSwap(f))
+      o.xSign := Mux(x.swap, x.sB, x.sA)
+      o.xExp := Mux(x.swap, x.ub.exp, x.ua.exp)
+      // pipelined, the difference both ways chosen by the swap; unpipelined, one subtract after the swap: ABC maps
+      // that smaller (406 against 454 LUTs on xc7)
+      o.d := (if (pipe.budget.isEmpty) o.xExp - Mux(x.swap, x.ua.exp, x.ub.exp) else Mux(x.swap, x.ub.exp - x.ua.exp, x.ua.exp - x.ub.exp))
+      o.xSig := Mux(x.swap, x.ub.sig, x.ua.sig)
+      o.ySig := Mux(x.swap, x.ua.sig, x.ub.sig)
+      o.effSub := x.effSub; o.toPos := x.tp; o.sp := x.sp; o.zeroSign := x.zeroSign
+      o
+    }
     // 2: align y; shifted-out bits are ORed into the LSB
     val al = pipe.step(swSat, (if (satApart) 0 else Depth.carry(f.expBits)) + Depth.shift(dMax) + 1) { r =>
       val dSat = if (satApart) r.d else saturate(r.d)

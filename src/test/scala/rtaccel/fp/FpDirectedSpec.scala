@@ -69,6 +69,46 @@ class FpDirectedSpec extends AnyFunSuite with ChiselScalatestTester {
     io.widen := Fp.convert(fo, fp32, io.c, io.up)
   }
 
+  /** The directed sub and conversion pipelined for ECP5 (4-input LUTs, where the adder swaps its operands a segment
+    * after its compare and saturates the difference apart), a result `lat` cycles after its operands. */
+  private class DirectedPiped(fo: FpFormat, budget: Int) extends Module {
+    val io = IO(new Bundle {
+      val a = Input(UInt(32.W)); val b = Input(UInt(32.W)); val up = Input(Bool())
+      val sub = Output(UInt(fo.width.W)); val conv = Output(UInt(fo.width.W))
+    })
+    private val pipe = new Stager(Some(budget), DspShape(18, 18, 3, registered = true), None, 4)
+    private val (a, b, up) = (Timed(RegNext(io.a), 1, 0), Timed(RegNext(io.b), 1, 0), Timed(RegNext(io.up), 1, 0))
+    private val sub = Fp.subDirectedT(pipe, fp32, fo, a, b, up)
+    private val conv = Fp.convertT(pipe, fp32, fo, a, up)
+    val lat: Int = sub.at max conv.at
+    io.sub := pipe.delayTo(sub, lat).v; io.conv := pipe.delayTo(conv, lat).v
+  }
+
+  test("RTL directed sub and conversion into bf16, pipelined for 4-input LUTs at 5 and 7 levels, equal SoftFloat bit for bit, one per cycle") {
+    val bf16 = FpFormat(8, 7); val so = new SoftFloat(bf16)
+    for (budget <- Seq(5, 7)) {
+      val g32 = new FpTestGen(fp32, 30 + budget)
+      test(new DirectedPiped(bf16, budget)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
+        val lat = dut.lat
+        val n = 30000
+        val ins = IndexedSeq.tabulate(n) { i =>
+          val (a, b) = if (i % 4 == 0) g32.nearby() else if (i % 4 == 1) g32.cancel() else if (i % 4 == 2) (g32.randomEdge(), g32.randomEdge()) else (g32.uniform(), g32.uniform())
+          (a, b, (i * 7 & 2) == 0)
+        }
+        for (i <- 0 until n + lat) {
+          if (i < n) { val (a, b, up) = ins(i); dut.io.a.poke(a.U); dut.io.b.poke(b.U); dut.io.up.poke(up.B) }
+          if (i >= lat) {
+            val (a, b, up) = ins(i - lat); val mode = if (up) Up else Down
+            assert(dut.io.sub.peek().litValue.toLong == so.subFrom(sf32, a, b, mode), f"$budget levels: sub a=0x$a%08x b=0x$b%08x up=$up")
+            assert(dut.io.conv.peek().litValue.toLong == so.convertFrom(sf32, a, mode), f"$budget levels: convert a=0x$a%08x up=$up")
+          }
+          dut.clock.step()
+        }
+        info(s"$budget levels: $lat cycles")
+      }
+    }
+  }
+
   // bf16 narrows the fraction only, fp16 the exponent too; make regress adds e8m15 (one Verilator build each)
   for ((fo, name) <- Seq((FpFormat(8, 7), "bf16"), (FpFormat(5, 10), "fp16")) ++
       (if (rtaccel.Regress.full) Seq((FpFormat(8, 15), "e8m15")) else Nil))
