@@ -56,7 +56,7 @@ object Synthesis {
           rtaccelVersion: String, cachedOnly: Boolean = false): Synthesis = {
     val version = Yosys.version()
     val dir = cacheDir(files, top, family, cacheRoot)
-    val recipe = Yosys.recipe(family, top, modules(files))
+    val recipe = Yosys.recipe(family, top, modules(files), Yosys.multiClockMemories(hierarchy(files, top)))
     val stat = dir.resolve(Yosys.statFile)
     val cached = Files.isRegularFile(stat)
     if (!cached && cachedOnly) throw new NotCached(s"$what for $family")
@@ -96,7 +96,7 @@ object Synthesis {
   def cacheDir(files: Seq[Path], top: String, family: String, cacheRoot: Path): Path =
     // the proxy's rules are part of the key: levels.json is all that is kept of the netlist
     cacheRoot.resolve(hash(files, s"${Yosys.version()} $family $top levels v${Levels.version} dsp ${Timing.forFamily(family).dspLevels}\n" +
-      Yosys.recipe(family, top, modules(files))))
+      Yosys.recipe(family, top, modules(files), Yosys.multiClockMemories(hierarchy(files, top)))))
 
   /** How many times each module is instantiated in the design under `top` (top itself once). */
   def countInstances(mods: Map[String, Map[String, Long]], top: String): Map[String, Long] = {

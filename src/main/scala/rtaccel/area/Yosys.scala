@@ -33,10 +33,30 @@ object Yosys {
     * reuses an old result. ltp sees each module alone: an instance of a submodule is one cell of its parent and
     * cut like a flip-flop (its own depth is its module's entry).
     */
-  def recipe(family: String, top: String, modules: Seq[String]): String = {
+  def recipe(family: String, top: String, modules: Seq[String], memories: Seq[String] = Nil): String = {
     val cuts = (pathCuts ++ modules.sorted.distinct).map("t:" + _).mkString(" ")
-    s"synth_xilinx -family $family -top $top; tee -q -o $statFile stat -json; " +
+    inlineMemories(top, memories) + s"synth_xilinx -family $family -top $top; tee -q -o $statFile stat -json; " +
       s"tee -q -o $ltpFile ltp -noff $cuts %% %n; write_json $netlistFile"
+  }
+
+  /** firtool emits each memory as a module with a clock input per port. Kept apart, its ports' clocks are different
+    * wires to Yosys, so a read port's address register cannot join a write port of "another" clock (memory_dff:
+    * "address FF clock is not compatible with write clock"): the read stays asynchronous and the memory can only be
+    * LUT RAM. A 8192 x 257 cache data array (RESP_ORDER=tagged, NODE_BANKS: a read and a write port) then took
+    * 15k LUTs and 11k LUT RAM instead of 58 RAMB36. These modules are inlined into their parents (every other module
+    * keeps its hierarchy), where both ports' clocks are the platform's one clock, as in a flat synthesis.
+    */
+  private def inlineMemories(top: String, memories: Seq[String]): String =
+    if (memories.isEmpty) "" else s"hierarchy -top $top; setattr -mod -set keep_hierarchy 1; " +
+      s"setattr -mod -unset keep_hierarchy ${memories.sorted.distinct.mkString(" ")}; flatten; setattr -mod -unset keep_hierarchy; "
+
+  // a port clock the module clocks registers on (an asynchronous read port's clock is unused)
+  private val portClock = """posedge\s+((?:R|W|RW)\d+_clk)\b""".r
+  /** The modules among `files` that firtool emitted for memories clocked by more than one port clock: a synchronous
+    * read beside a write (see inlineMemories). */
+  def multiClockMemories(files: Seq[Path]): Seq[String] = files.filter(_.toString.endsWith(".sv")).flatMap { f =>
+    val clocks = portClock.findAllMatchIn(Files.readString(f)).map(_.group(1)).toSet
+    if (clocks.size > 1) Some(f.getFileName.toString.stripSuffix(".sv")) else None
   }
 
   /** Runs `read_verilog` on `files` and then `recipe` in `dir` (stat, ltp and netlist files land there); Yosys'

@@ -41,6 +41,17 @@ class AreaSpec extends AnyFunSuite {
     assert(ff1024 - ff256 < 32, s"flip-flops grew from $ff256 to $ff1024 with 4x the cache: the memory went to registers")
   }
 
+  test("RESP_ORDER=tagged: the data array's read port beside its write port still maps to block RAM, not LUT RAM") {
+    assume(hasYosys, "yosys absent: make test installs it from apt")
+    // firtool's memory module clocks its read and its write port on two inputs: kept apart, Yosys could not make the
+    // read synchronous and mapped the whole array to LUT RAM (Yosys.inlineMemories)
+    val (code, out, err) = area("--node-cache", "1024", "--resp-order", "tagged", "--board", "xc7k325t")
+    assert(code == 0, err)
+    val j = last(out)
+    val dataBits = 1024L * 4 * 257
+    assert(j("bram36").num >= dataBits / 36864.0 && j("lutram").num < 1024, s"${j("bram36").num} BRAM36, ${j("lutram").num} LUT RAM for $dataBits bits")
+  }
+
   test("a board that is too small is refused with the resource and both numbers (exit 3)") {
     assume(hasYosys, "yosys absent: make test installs it from apt")
     // xc7k325t's clock and memory: the same parameters, so the same circuit (its Verilog kept in memory), whose
