@@ -126,7 +126,9 @@ object Throughput {
     val primOverhead = s.primCache.fold(0.0)(_ => cachePathCycles) * s.leafAccesses
     // PIPELINE's registers lengthen every node and leaf test, and its slices every access (the fit above is of the
     // fixed stages)
-    val (boxExtra, triExtra) = rtaccel.iu.PipeLatencies.extraOverFixed(p)
+    val (boxExtra0, triExtra) = rtaccel.iu.PipeLatencies.extraOverFixed(p)
+    // NODE_FORMAT=q<k>: PIPELINE's registers in the node decoder too
+    val boxExtra = boxExtra0 + (if (p.nodeQuantBits > 0) rtaccel.iu.NodeDecode.latencyOf(p.nodes) - rtaccel.iu.NodeDecode.FixedLatency else 0)
     def slices(cached: Boolean) = p.accessSliceCycles + (if (cached) p.cacheSliceCycles else p.passSliceCycles)
     val overhead = nodeOverhead + primOverhead + (boxExtra + slices(s.nodeCache.isDefined)).toDouble * s.nodeAccesses +
       (triExtra + p.tuLeafCycles + slices(s.primCache.isDefined)).toDouble * s.leafAccesses

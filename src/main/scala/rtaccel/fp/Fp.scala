@@ -305,14 +305,23 @@ object Fp {
     * (both checked here), so the rounding of roundPack never acts. The int-to-float and the scale of a
     * quantized node's planes (iu.NodeDecode).
     */
-  def fromUIntScaled(f: FpFormat, q: UInt, e: SInt): UInt = {
-    val w = q.getWidth
+  def fromUIntScaled(f: FpFormat, q: UInt, e: SInt): UInt = fromUIntScaledT(Stager.none, f, Timed(q, 0, 0), Timed(e, 0, 0)).v
+
+  /** [[fromUIntScaled]] in segments between which `pipe` may place registers (roundPack's). */
+  def fromUIntScaledT(pipe: Stager, f: FpFormat, q: Timed[UInt], e: Timed[SInt]): Timed[UInt] = {
+    val w = q.v.getWidth
     require(w <= f.manBits + 1, s"a $w-bit integer does not fit the ${f.manBits + 1}-bit significand of ${f.name}")
-    require(-(BigInt(1) << (e.getWidth - 1)) >= 1 - f.bias - f.manBits,
-      s"a ${e.getWidth}-bit scale reaches below the smallest subnormal of ${f.name}: the product would round")
-    val ew = (e.getWidth max expW(f)) + 1
-    val ex = e.pad(ew) + (f.bias + w - 1).S(ew.W) // sig q read as q / 2^(w-1): biased exponent e + bias + w - 1
-    Mux(q === 0.U, 0.U(f.width.W), roundPack(f, false.B, ex, q, false.B))
+    require(-(BigInt(1) << (e.v.getWidth - 1)) >= 1 - f.bias - f.manBits,
+      s"a ${e.v.getWidth}-bit scale reaches below the smallest subnormal of ${f.name}: the product would round")
+    val ew = (e.v.getWidth max expW(f)) + 1
+    val eW = e.v.getWidth
+    // (op's operands share one width: each is cut back to its own)
+    val x = pipe.op(Seq(q, e.map(0)(_.asUInt)), Depth.carry(ew) max Depth.reduce(w)) { v =>
+      val (qv, ev) = (v(0)(w - 1, 0), v(1)(eW - 1, 0).asSInt)
+      val ex = ev.pad(ew) + (f.bias + w - 1).S(ew.W) // sig q read as q / 2^(w-1): biased exponent e + bias + w - 1
+      roundIn(false.B, ex, qv, false.B, None, special(false.B, false.B, qv === 0.U, false.B)) // q = 0: +0
+    }
+    roundPackT(pipe, f, x)
   }
 
   // ---------------------------------------------------------------------------------------------------------

@@ -61,6 +61,13 @@ class ThroughputSpec extends AnyFunSuite {
     assert(one.beatCycles == (128 + 128) / 32.0 && two.beatCycles == 128 / 32.0 + 6.0, s"${one.beatCycles} ${two.beatCycles}")
     val triExtra = rtaccel.iu.PipeLatencies.of(pk.copy(triInterval = 2)).tri - rtaccel.iu.PipeLatencies.of(pk).tri
     assert(two.latencyCycles - one.latencyCycles == (6.0 - 4.0) + triExtra, s"${two.latencyCycles} ${one.latencyCycles} $triExtra")
+    // NODE_FORMAT=q8 pipelined: every node test takes the decoder's registers beyond its two fixed stages too
+    val q8 = Presets.paper2017.copy(nodeQuantBits = 8, nodeCache = CacheParams(), memRetries = 0)
+    def q8Sink = { val s = new CacheSink(None, None, q8.nodeAccessBytes, c => c * 64L); for (r <- 0 until 2) { s.node(r, 0, 0); s.node(r, 1, 1); s.leaf(r, 0, 3, 2) }; s.counts }
+    val dec = rtaccel.iu.NodeDecode.latencyOf(q8.nodes) - rtaccel.iu.NodeDecode.FixedLatency
+    assert(dec > 0)
+    assert(Throughput.predict(q8, q8Sink, rays = 2, tus = 1).latencyCycles -
+      Throughput.predict(q8.copy(pipelining = rtaccel.config.Pipelining.Fixed), q8Sink, rays = 2, tus = 1).latencyCycles == 2 * (bx + dec) + tx + 3 * 7)
     // slot64 at TRI_II=2: two beats a primitive already, nothing but the pipe's latency moves
     assert(Throughput.predict(p.copy(triInterval = 2), sink(cached = false), rays = 2, tus = 1).beatCycles == u.beatCycles)
     // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:

@@ -6,7 +6,7 @@ import chiseltest.simulator.VerilatorBackendAnnotation
 import org.scalatest.funsuite.AnyFunSuite
 import scala.util.Random
 import rtaccel.bvh.QNodeLayout
-import rtaccel.config.PlatformParams
+import rtaccel.config.{Pipelining, PlatformParams}
 
 /** NODE_FORMAT=q<k>: the IU's decode stage against the model's decoder (QNodeLayout.plane), raw bits, one node per
   * cycle: directed nodes (q = 0 and q = max, e = -128, -127 and 127 with overflow to +inf, subnormal results,
@@ -53,15 +53,21 @@ class NodeDecodeSpec extends AnyFunSuite with ChiselScalatestTester {
   private val regress = rtaccel.Regress.full
   // q8 at M=4 is the one of make test (5000 random nodes: the run, not the build, is this spec's time); make regress
   // takes 20000 and adds the narrowest and widest planes and other widths
-  private val cases = Seq((4, 8, if (regress) 20000 else 5000)) ++ (if (regress) Seq((2, 2, 20000), (8, 16, 20000), (4, 12, 20000)) else Nil)
-  for ((m, k, nRandom) <- cases)
-    test(s"M=$m q$k: directed nodes and $nRandom random ones decode to the model's planes, bit for bit") {
-      val p = PlatformParams(tus = 2, m = m, nodeQuantBits = k)
+  // (each at PIPELINE=auto for the paper's board, registers inside the scaling and the sum; make regress adds the
+  // fixed stages and ECP5's 4-input-LUT circuit)
+  private val auto = (Pipelining.Auto, "xc5v")
+  private val cases = Seq((4, 8, if (regress) 20000 else 5000, auto)) ++ (if (regress) Seq((2, 2, 20000, auto), (8, 16, 20000, auto), (4, 12, 20000, auto),
+    (4, 8, 20000, (Pipelining.Fixed, "xc5v")), (4, 8, 20000, (Pipelining.Auto, "ecp5"))) else Nil)
+  for ((m, k, nRandom, (pl, fam)) <- cases)
+    test(s"M=$m q$k PIPELINE=${pl.name}${if (fam != "xc5v") s" for $fam" else ""}: directed nodes and $nRandom random ones decode to the model's planes, bit for bit") {
+      val p = PlatformParams(tus = 2, m = m, nodeQuantBits = k, pipelining = pl, family = fam)
       val rnd = new Random(7 + k)
       val nodes = directed(p, rnd) ++ Seq.fill(nRandom)(random(p, rnd))
       test(new NodeDecode(p.nodes)).withAnnotations(Seq(VerilatorBackendAnnotation)) { dut =>
         dut.clock.setTimeout(0)
-        val lat = 2
+        val lat = dut.latency
+        assert(pl != Pipelining.Fixed || lat == NodeDecode.FixedLatency, s"the fixed stages are two registers, not $lat")
+        assert(NodeDecode.latencyOf(p.nodes) == lat, "the throughput model's latency is the module's")
         var checked = 0
         for (i <- 0 until nodes.length + lat) {
           if (i < nodes.length) {
@@ -84,7 +90,7 @@ class NodeDecodeSpec extends AnyFunSuite with ChiselScalatestTester {
           dut.clock.step()
         }
         assert(!dut.io.out.valid.peek().litToBoolean)
-        info(s"$checked nodes (${nodes.length - nRandom} directed)")
+        info(s"$checked nodes (${nodes.length - nRandom} directed), $lat cycles")
         val planes = nodes.flatMap(n => expect(p, n).zipWithIndex.filter(_._2 % 7 != 6).map(_._1))
         def count(f: Float => Boolean) = planes.count(b => f(java.lang.Float.intBitsToFloat(b)))
         // the directed set must reach every class it is meant to cover
