@@ -130,7 +130,7 @@ object Throughput {
     // NODE_FORMAT=q<k>: PIPELINE's registers in the node decoder too
     val boxExtra = boxExtra0 + (if (p.nodeQuantBits > 0) rtaccel.iu.NodeDecode.latencyOf(p.nodes) - rtaccel.iu.NodeDecode.FixedLatency else 0)
     def slices(cached: Boolean) = p.accessSliceCycles + (if (cached) p.cacheSliceCycles else p.passSliceCycles)
-    val overhead = nodeOverhead + primOverhead + (boxExtra + slices(s.nodeCache.isDefined)).toDouble * s.nodeAccesses +
+    val overhead = nodeOverhead + primOverhead + (boxExtra + p.bankSliceCycles + slices(s.nodeCache.isDefined)).toDouble * s.nodeAccesses +
       (triExtra + p.tuLeafCycles + slices(s.primCache.isDefined)).toDouble * s.leafAccesses
     // PRIM_FORMAT=packed with TRI_II=k: the LeafAssembler lets a record out every k cycles at most, so the primitive
     // port takes k cycles a primitive where its beats take fewer (slot64's TRI_II is at most its beats)

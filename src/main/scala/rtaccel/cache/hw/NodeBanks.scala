@@ -44,7 +44,9 @@ class NodeBanks(p: PlatformParams, axiP: AxiParams) extends Module {
   xbar.io.req <> io.req
   io.resp <> xbar.io.resp
   for ((bank, b) <- banks.zipWithIndex) {
-    bank.io.req <> xbar.io.bankReq(b)
+    // with PIPELINE a register slice between the crossbar and the bank: a cluster's request ran through the crossbar's
+    // choice into the bank's lookup in one cycle (10 LUT levels on xc5v, the deepest path of the shared cache)
+    bank.io.req <> rtaccel.arb.Slice(p, xbar.io.bankReq(b))
     xbar.io.bankResp(b) <> bank.io.resp
     bank.io.primBase := io.primBase
     bank.io.maxLevel := io.maxLevel
