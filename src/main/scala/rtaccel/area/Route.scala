@@ -25,8 +25,8 @@ object Route {
     * router2, which routes congested designs in other ways (a different negotiation of overused wires). */
   val Routers: Seq[String] = Seq("router1", "router2")
   val DefaultRouter: String = Routers.head
-  /** nextpnr-ecp5's placers (TIMING_PLACER=): heap, its default and the placer of every route in docs/timing.md before
-    * the twenty-second round, analytic with timing-driven net weights; static, an electrostatic placer that spreads
+  /** nextpnr-ecp5's placers (TIMING_PLACER=): heap, its default and the placer of every route in docs/timing.md that
+    * names no other, analytic with timing-driven net weights; static, an electrostatic placer that spreads
     * cells by density; sa, simulated annealing (slow on designs of tens of thousands of cells). */
   val Placers: Seq[String] = Seq("heap", "static", "sa")
   val DefaultPlacer: String = Placers.head
