@@ -94,20 +94,36 @@ object Fp {
   /** Leading-zero count of x (x != 0; the result for x == 0 is unspecified), as a log-depth tree:
     * x is padded with ones to a power-of-two width, halves are combined as (hi all zero) ? hi.width + lo : hi.
     */
-  private[fp] def lzc(x: UInt): UInt = {
+  private[fp] def lzc(x: UInt): UInt = lzcBlock(lzcPad(x))._2
+
+  /** x with ones below it to a power-of-two width (the count of a nonzero x is unchanged). */
+  private def lzcPad(x: UInt): UInt = {
     val n = x.getWidth
     val k = log2Ceil(n) max 1
-    val padded = if ((1 << k) > n) Cat(x, Fill((1 << k) - n, 1.U(1.W))) else x
-    def go(v: UInt): (Bool, UInt) = { // (all zero, count) for a block of power-of-two width
-      val w = v.getWidth
-      if (w == 1) (!v(0), 0.U(0.W))
-      else {
-        val (hz, hc) = go(v(w - 1, w / 2))
-        val (lz, lc) = go(v(w / 2 - 1, 0))
-        (hz && lz, Mux(hz, Cat(1.U(1.W), lc), Cat(0.U(1.W), hc)))
-      }
+    if ((1 << k) > n) Cat(x, Fill((1 << k) - n, 1.U(1.W))) else x
+  }
+  /** (all zero, leading zeros) of a block of power-of-two width: a tree of halves. */
+  private def lzcBlock(v: UInt): (Bool, UInt) = {
+    val w = v.getWidth
+    if (w == 1) (!v(0), 0.U(0.W))
+    else lzcJoin(lzcBlock(v(w - 1, w / 2)), lzcBlock(v(w / 2 - 1, 0)))
+  }
+  private def lzcJoin(h: (Bool, UInt), l: (Bool, UInt)): (Bool, UInt) =
+    (h._1 && l._1, Mux(h._1, Cat(1.U(1.W), l._2), Cat(0.U(1.W), h._2)))
+  /** lzc in two halves that a register may separate: the (all zero, count) of each block of `b` bits (a power of
+    * two), most significant first, then [[lzcBlocksJoin]] over them. The same tree as lzc, cut at one level.
+    */
+  private[fp] def lzcBlocks(x: UInt, b: Int): Seq[(Bool, UInt)] = {
+    val p = lzcPad(x)
+    val bb = b min p.getWidth
+    (p.getWidth / bb - 1 to 0 by -1).map(i => lzcBlock(p(i * bb + bb - 1, i * bb)))
+  }
+  private[fp] def lzcBlocksJoin(bs: Seq[(Bool, UInt)]): UInt = {
+    def go(s: Seq[(Bool, UInt)]): (Bool, UInt) = if (s.length == 1) s.head else {
+      val (h, l) = s.splitAt(s.length / 2)
+      lzcJoin(go(h), go(l))
     }
-    go(padded)._2
+    go(bs)._2
   }
 
   private def packInf(f: FpFormat, sign: Bool): UInt = Cat(sign, f.maxExp.U(f.expBits.W), 0.U(f.manBits.W))
@@ -157,6 +173,15 @@ object Fp {
     val rMask = Option.when(maskW > 0)(UInt(maskW.W))
   }
 
+  /** roundPack's first segment when its leading-zero count is cut in two (see roundPackT): the count's blocks. */
+  class NormLzBlocks(n: Int, w: Int, val blocks: Int, blockBits: Int, val rW: Int, roomW: Int) extends RoundIn(n, w) {
+    val zero = Vec(blocks, Bool())
+    val count = Vec(blocks, UInt(blockBits.W))
+    val room = UInt(roomW.W)
+    val rSat = UInt(rW.W)
+    val leftCase = Bool()
+  }
+
   /** roundPack's first segment: NormMid with the leading-zero count in `sl`, not yet saturated at `room`. */
   class NormLz(n: Int, w: Int, slW: Int, rW: Int) extends NormMid(n, w, slW, rW) {
     val room = UInt(slW.W)
@@ -194,25 +219,52 @@ object Fp {
     // the rounding reads the top m+2 bits and an OR of the rest: the shifts deliver those j bits (the OR as the
     // lowest), never the whole significand (docs/fp.md)
     val j = m + 3
-    val lzLevels = Depth.lzc(if (maxLs >= n - 1) n else maxLs + 1)
+    val nLz = if (maxLs >= n - 1) n else maxLs + 1
+    val lzLevels = Depth.lzc(nLz, pipe.lutInputs)
+    // A count deeper than the budget (a product's significand on 4-input LUTs: 6 levels at 64 bits, WatertightPipe's
+    // routed critical path on ECP5) is cut in two segments: the counts of 8-bit blocks, then the tree above them.
+    val lzBlock = 8
+    val lzSplit = pipe.budget.exists(lzLevels > _) && nLz > lzBlock
+    val roomW = log2Ceil(n + 1)
     val lut4 = pipe.smallLuts
     // 1: leading zeros and, beside them, the room left above exponent 1 and the right shift into the subnormal range
-    val lzd0 = pipe.step(x, lzLevels max (Depth.carry(w) + 1)) { r =>
+    // (the count is made where it was before the cut existed: Yosys' ABC maps the unpipelined adder in 422 LUTs
+    // instead of 406 on xc7 when the same logic is built in another order)
+    def front[A](r: RoundIn)(count: UInt => A): (UInt, SInt, Bool, A, UInt, UInt) = {
       val sig = if (n > n0) Cat(r.sig, 0.U((n - n0).W)) else r.sig
       val ex = r.exp.pad(w)
       // Exponent >= 1: shift left to normalise, but never below exponent 1 (subnormal results stay unnormalised).
       val leftCase = if (canUnderflow) geConst(ex, 1) else true.B
       // leading zeros of sig (sig != 0), saturated at maxLs via a sentinel bit
-      val lz = if (maxLs >= n - 1) lzc(sig) else lzc(Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
+      val lz = count(if (maxLs >= n - 1) sig else Cat(sig(n - 1, n - maxLs), 1.U(1.W)))
       val room = ex - 1.S
-      val roomSat = Mux(gtConst(ex, n + 1), n.U, room.asUInt(log2Ceil(n + 1) - 1, 0)) // room > n
+      val roomSat = Mux(gtConst(ex, n + 1), n.U, room.asUInt(roomW - 1, 0)) // room > n
       // Exponent < 1: shift right into the subnormal range, collecting the bits shifted out as sticky.
       val rAmt = 1.S - ex
       val rSat = Mux(ltConst(ex, -j), (j + 1).U, rAmt.asUInt(log2Ceil(j + 2) - 1, 0)) // rAmt > j + 1
+      (sig, ex, leftCase, lz, roomSat, rSat)
+    }
+    def normLz(r: RoundIn, sig: UInt, ex: SInt, leftCase: Bool, lz: UInt, roomSat: UInt, rSat: UInt): NormLz = {
       val o = Wire(new NormLz(n, w, lz.getWidth max roomSat.getWidth, rSat.getWidth))
       o.sign := r.sign; o.exp := ex; o.sig := sig; o.sl := lz; o.room := roomSat; o.rSat := rSat; o.leftCase := leftCase
       o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
       o
+    }
+    val lzd0 = if (!lzSplit) pipe.step(x, lzLevels max (Depth.carry(w) + 1)) { r =>
+      val (sig, ex, leftCase, lz, roomSat, rSat) = front(r)(lzc)
+      normLz(r, sig, ex, leftCase, lz, roomSat, rSat)
+    } else {
+      val blocks = pipe.step(x, Depth.lzc(lzBlock, pipe.lutInputs) max (Depth.carry(w) + 1)) { r =>
+        val (sig, ex, leftCase, bs, roomSat, rSat) = front(r)(lzcBlocks(_, lzBlock))
+        val o = Wire(new NormLzBlocks(n, w, bs.length, log2Ceil(lzBlock), rSat.getWidth, roomW))
+        o.sign := r.sign; o.exp := ex; o.sig := sig; o.room := roomSat; o.rSat := rSat; o.leftCase := leftCase
+        o.sticky := r.sticky; o.toPos := r.toPos; o.sp := r.sp
+        for (((z, c), i) <- bs.zipWithIndex) { o.zero(i) := z; o.count(i) := c }
+        o
+      }
+      pipe.step(blocks, Depth.lzc(blocks.v.blocks, pipe.lutInputs)) { r =>
+        normLz(r, r.sig, r.exp, r.leftCase, lzcBlocksJoin(r.zero.zip(r.count).toSeq), r.room, r.rSat)
+      }
     }
     // Where LUTs have 4 inputs the first two segments are cut apart at every budget: counted for 6-input LUTs they
     // fit 7 levels, mapped to 4-input ones they were 11 (the exponent -> the right shift's saturated amount -> the

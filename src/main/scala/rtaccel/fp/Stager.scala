@@ -176,8 +176,10 @@ object Depth {
   def shift(n: Int): Int = (log(2, n) + 1) / 2 max 1
   /** An adder or comparator of n bits on a carry chain: a LUT into the chain and the chain itself. */
   def carry(n: Int): Int = 1 + n / 24
-  /** A leading-zero count of n bits (a tree of 2:1 selections, two per LUT). */
-  def lzc(n: Int): Int = (log(2, n) + 1) / 2 + 1
+  /** A leading-zero count of n bits (a tree of 2:1 selections): two per LUT6; on k < 6 inputs one per level, log2(n)
+    * (64 bits: 6 levels, the routed critical path of WatertightPipe on ECP5 was such a count, 7 elements there).
+    */
+  def lzc(n: Int, k: Int = LutInputs): Int = if (k >= LutInputs) (log(2, n) + 1) / 2 + 1 else log(2, n) max 1
   /** A product in one DSP block: the block's multiply and its post-adder (the proxy counts the same: area.Levels). */
   def dsp(d: DspShape): Int = d.levels + 1
 }
