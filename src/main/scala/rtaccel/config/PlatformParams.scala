@@ -341,8 +341,8 @@ final case class PlatformParams(
     */
   def passSliceCycles: Int = if (stageBudget.isDefined && mcResponseBuffers) 3 else 0
   /** Cycles PIPELINE's registers in a cache path add to its hits: a lookup's decision waits a cycle before it enters
-    * the queues, a data RAM read or write reaches the block RAMs a cycle after it is decided, and in request order
-    * the head ticket waits in a register (rtaccel.cache.hw.CachePath).
+    * the queues, a data RAM read or write reaches the block RAMs a cycle after it is decided, and the head ticket waits
+    * in a register (rtaccel.cache.hw.CachePath), which a tagged clean hit passes by.
     */
   def cacheSliceCycles: Int = if (stageBudget.isEmpty) 0 else if (respTagged) 2 else 3
   /** PIPELINE's budget: LUT levels at most between two registers of a datapath (None: the fixed stages). */

@@ -74,9 +74,10 @@ object CachePathFormalSpec {
   val answerBound: Int = 16 + slices + (if (slices > 0) 4 else 0)
   /** the TAG_FORWARD=1 proof's depth in make regress (make test: the in-order path's) */
   val forwardDepth: Int = 14 + slices
-  /** cycles PIPELINE's registers add to a tagged hit (no head ticket register: CachePath) */
+  /** cycles PIPELINE's registers add to a clean tagged hit (the head ticket's register is on the other tickets' way) */
   val taggedSlices: Int = CachePathFormal.platform(CacheParams(4, 1, CachePolicy.Dm), tagged = true).cacheSliceCycles
-  /** answerBound with tagged answers */
+  /** answerBound with tagged answers (the head ticket's register and the fill check's cycle fit it: 10,000 random
+    * cycles, CachePathSimSpec) */
   val taggedBound: Int = 16 + taggedSlices
   /** the tagged proofs' depth in make test */
   val taggedDepth: Int = 8 + taggedSlices

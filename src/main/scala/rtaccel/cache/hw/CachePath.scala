@@ -76,18 +76,26 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val ticketScan = if (tagged) Some(Module(new ScanQueue(new Ticket, tickets)).suggestName("ticketQ")) else None
   private val ticketFifo = if (tagged) None else Some(Module(new Queue(new Ticket, tickets)).suggestName("ticketQ"))
   private def ticketQ: QueueIO[Ticket] = ticketScan.fold(ticketFifo.get.io)(_.io)
-  /** the tickets the data stage serves. In order with PIPELINE: the head ticket waits in a register, so it comes from
-    * flip-flops, not the queue's LUT RAM (read asynchronously into the output queue's write: the MC's routed
-    * critical path on ECP5); a hit waits a cycle more (PlatformParams.cacheSliceCycles), one ticket more is held.
-    * Tagged keeps the queue's own head: its clean-hit check scans every held fill, which the register would hide.
+  /** the tickets the data stage serves. With PIPELINE the head ticket waits in a register, so it comes from
+    * flip-flops, not the queue's storage: in order its LUT RAM (read asynchronously into the output queue's write:
+    * the MC's routed critical path on ECP5), tagged a 32:1 selection of the ScanQueue's slots before the fill check
+    * (10 LUT levels on xc5v, the deepest path of a tagged platform). In order a hit waits a cycle more
+    * (PlatformParams.cacheSliceCycles); one ticket more is held. Tagged, the clean-hit check scans the register too
+    * (`heldTickets`), so no held fill is hidden from it.
     */
-  private val ticketOut: DecoupledIO[Ticket] = ticketFifo.filter(_ => slice > 0).fold(ticketQ.deq) { f =>
+  private val headStage: Option[(Bool, Ticket)] = Option.when(slice > 0) {
+    (RegInit(false.B), Reg(new Ticket))
+  }
+  private val ticketOut: DecoupledIO[Ticket] = headStage.fold(ticketQ.deq) { case (held, bits) =>
     val out = Wire(Decoupled(new Ticket))
-    val held = RegInit(false.B); val bits = Reg(new Ticket)
-    f.io.deq.ready := !held || out.ready
-    when(f.io.deq.ready) { held := f.io.deq.valid; bits := f.io.deq.bits }
+    ticketQ.deq.ready := !held || out.ready
+    when(ticketQ.deq.ready) { held := ticketQ.deq.valid; bits := ticketQ.deq.bits }
     out.valid := held; out.bits := bits
     out
+  }
+  /** RESP_ORDER=tagged: every ticket the data stage has not finished, the queue's and the head register's */
+  private def heldTickets(t: ScanQueue[Ticket]): Seq[Valid[Ticket]] = t.io.held ++ headStage.map { case (held, bits) =>
+    val v = Wire(Valid(new Ticket)); v.valid := held; v.bits := bits; v
   }
   val missQ = Module(new Queue(g.memReq, hw.cacheMissQueue))
   io.memReq <> missQ.io.deq
@@ -126,7 +134,7 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   s1Go := (if (slice == 0) roomAll else !s2Valid || eFire)
   if (slice > 0) when(s1Fire) { s2Valid := true.B }.elsewhen(eFire) { s2Valid := false.B }
   // every ticket older than the entering decision is held or done, so the check sees all the fills ahead of it
-  val clean = ticketScan.fold(false.B)(t => eHit && !t.io.held.map(e => e.valid && e.bits.fill && e.bits.line === eLine).reduce(_ || _))
+  val clean = ticketScan.fold(false.B)(t => eHit && !heldTickets(t).map(e => e.valid && e.bits.fill && e.bits.line === eLine).reduce(_ || _))
   // TAG_FORWARD=1: a new request enters stage 1 in the cycle the one there decides; its read gets the set that
   // decision writes from the tag RAMs' write-first port (TagArray)
   val advance = if (g0.p.tagForward) s1Go else false.B
@@ -318,7 +326,19 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
 
   val missHead = ticketOut.valid && !head.hit
   // RESP_ORDER=tagged: a fill starts only when no queued clean hit still reads its data line (write after read)
-  val fillBlocked = hitQ.fold(false.B)(q => head.fill && beat === 0.U && q.io.held.map(e => e.valid && e.bits.line === head.line).reduce(_ || _))
+  val fillBlocked = hitQ.fold(false.B) { q =>
+    val reads = q.io.held.map(e => e.valid && e.bits.line === head.line).reduce(_ || _)
+    headStage match {
+      case None => head.fill && beat === 0.U && reads
+      case Some((held, _)) =>
+        // PIPELINE: the check is a cycle old, so the hit queue's compares reach a register, not the response's ready
+        // (and the MC's arbitration behind it). It still holds: the head is the same ticket (the register neither
+        // loaded nor let it go), and no clean hit on its line has entered meanwhile (the clean check sees the head
+        // register's fill). A fill's first beat waits a cycle after its ticket reaches the head.
+        val passed = RegNext(held && !ticketOut.ready && !reads, false.B)
+        head.fill && beat === 0.U && !passed
+    }
+  }
   val canTakeMiss = missHead && !readFlight.reduce(_ || _) && (head.silent || outRoom) && !fillBlocked
   when(canTakeMiss && !head.silent) { assert(outQ.io.enq.ready, "CachePath: outRoom said room where outQ had none") }
   io.memResp.ready := canTakeMiss
