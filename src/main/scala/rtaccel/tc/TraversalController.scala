@@ -40,10 +40,17 @@ class TraversalController(p: PlatformParams) extends Module {
   val prepared = Module(new Queue(new TuRay, slots))
   val credits = RegInit(slots.U(log2Ceil(slots + 1).W))
   val inAxis = RegInit(0.U(2.W)) // the axis the divider takes next: 0 = ready for a ray
+  // `inIdle` is inAxis === 0 in a register of its own, for the handshake alone, and dy, dz are taken whenever the
+  // divider is idle (they are read only after a ray was accepted, which is such a cycle): the acceptance then drives
+  // two counters' next states, not 64 enables. The loop inAxis -> ready -> accept -> inAxis ran across the divider's
+  // input multiplexers (7.7 ns of wire, the smallest platform's routed critical path on ECP5, docs/timing.md).
+  val inIdle = RegInit(true.B)
   val heldD = Reg(Vec(2, UInt(32.W))) // dy, dz of the ray being fed
-  io.in.ready := credits =/= 0.U && inAxis === 0.U
-  when(io.in.fire) { inAxis := 1.U; heldD := VecInit(io.in.bits.f(4), io.in.bits.f(5)) }
-    .elsewhen(inAxis =/= 0.U) { inAxis := Mux(inAxis === 2.U, 0.U, inAxis + 1.U) }
+  io.in.ready := credits =/= 0.U && inIdle
+  when(inAxis === 0.U) { heldD := VecInit(io.in.bits.f(4), io.in.bits.f(5)) }
+  when(io.in.fire) { inAxis := 1.U; inIdle := false.B }
+    .elsewhen(inAxis =/= 0.U) { inAxis := Mux(inAxis === 2.U, 0.U, inAxis + 1.U); inIdle := inAxis === 2.U }
+  assert(inIdle === (inAxis === 0.U), "TC: inIdle out of step with the axis counter")
   div.io.in.valid := io.in.fire || inAxis =/= 0.U
   div.io.in.bits.a := one
   div.io.in.bits.b := Mux(inAxis === 0.U, io.in.bits.f(3), heldD(inAxis(1)))
