@@ -325,9 +325,9 @@ final case class PlatformParams(
     * front of its pipes and the TU's on its answer (the throughput model adds them; cache.Throughput).
     */
   def accessSliceCycles: Int = if (stageBudget.isDefined) 7 else 0
-  /** Cycles PIPELINE adds to each node access with NODE_BANKS: the slice between the crossbar and the bank
-    * (cache.hw.NodeBanks; the throughput model adds it). */
-  def bankSliceCycles: Int = if (stageBudget.isDefined && nodeShared) 1 else 0
+  /** Cycles PIPELINE adds to each node access with NODE_BANKS: the slices between the crossbar and the bank, on the
+    * request and on each side of the answers' crossbar (cache.hw.NodeBanks; the throughput model adds them). */
+  def bankSliceCycles: Int = if (stageBudget.isDefined && nodeShared) 3 else 0
   /** Cycles PIPELINE adds to each leaf in the TU: its last result is applied a cycle after it arrives, its compare
     * with tmax registered (tu.TraversalUnit; the throughput model adds it). */
   def tuLeafCycles: Int = if (stageBudget.isDefined) 1 else 0

@@ -477,8 +477,12 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   val reqFire = io.req.fire
   io.counters.nodeRequests := counter(1.U, reqFire && !isLeaf)
   io.counters.leafRequests := counter(1.U, reqFire && isLeaf)
-  io.counters.primsRequested := counter(count, reqFire && isLeaf)
-  io.counters.bytesRequested := counter(Mux(isLeaf, g.leaf.bytes(count), p.nodeSlotBytes.U), reqFire)
+  // with PIPELINE a request's primitive and byte counts are registered before they are added (a cycle late): the
+  // count field's +1, the packed leaf's beats table and the counter's 40-bit add in one cycle were 7 LUT levels on
+  // xc5v, from the request's reference (the LX330T configuration in docs/roofline.md)
+  private def lateCounter(inc: UInt, en: Bool): UInt = counter(rtaccel.arb.Slice.late(p, inc), rtaccel.arb.Slice.late(p, en))
+  io.counters.primsRequested := lateCounter(count, reqFire && isLeaf)
+  io.counters.bytesRequested := lateCounter(Mux(isLeaf, g.leaf.bytes(count), p.nodeSlotBytes.U), reqFire)
   io.counters.busyBeats := counter(1.U, io.axi.r.fire)
   io.counters.readErrors := counter(1.U, io.axi.r.fire && rErr)
   io.counters.retries := counter(1.U, retryQ.fold(false.B)(_.io.enq.fire))

@@ -42,12 +42,15 @@ class NodeBanks(p: PlatformParams, axiP: AxiParams) extends Module {
 
   val xbar = Module(new BankCrossbar(n, k, p.respTagBits, p.nodeBankBits, axiP.dataBits))
   xbar.io.req <> io.req
-  io.resp <> xbar.io.resp
+  // with PIPELINE a register slice on each side of the answers' crossbar: a bank's answer tag ran through the
+  // cluster's choice back into the bank's ready (9 LUT levels on xc5v, the deepest path of the LX330T configuration
+  // in docs/roofline.md), and the crossbar's valid on into the IU (8)
+  for ((out, c) <- io.resp.zipWithIndex) out <> rtaccel.arb.Slice(p, xbar.io.resp(c))
   for ((bank, b) <- banks.zipWithIndex) {
     // with PIPELINE a register slice between the crossbar and the bank: a cluster's request ran through the crossbar's
     // choice into the bank's lookup in one cycle (10 LUT levels on xc5v, the deepest path of the shared cache)
     bank.io.req <> rtaccel.arb.Slice(p, xbar.io.bankReq(b))
-    xbar.io.bankResp(b) <> bank.io.resp
+    xbar.io.bankResp(b) <> rtaccel.arb.Slice(p, bank.io.resp)
     bank.io.primBase := io.primBase
     bank.io.maxLevel := io.maxLevel
     bank.io.clearCounters := io.clearCounters

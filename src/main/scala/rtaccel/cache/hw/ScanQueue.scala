@@ -21,11 +21,20 @@ class ScanQueue[T <: Data](gen: T, val entries: Int) extends Module {
   private val ptrBits = math.max(1, log2Ceil(entries))
   private def next(x: UInt): UInt = if (entries == 1) 0.U else Mux(x === (entries - 1).U, 0.U, x + 1.U)
   private val head = RegInit(0.U(ptrBits.W)); private val tail = RegInit(0.U(ptrBits.W))
-  io.enq.ready := !full(tail)
+  // the entries held, and whether there is room, in registers of their own: `!full(tail)` was a selection of every
+  // slot's bit by the tail (3 LUT levels at 32 entries) in front of the cache path's lookup decision and on into its
+  // tag RAMs' write enables (8 levels on xc5v, CachePath)
+  private val count = RegInit(0.U(log2Ceil(entries + 1).W))
+  private val room = RegInit(true.B)
+  private val countNext = count + io.enq.fire.asUInt - io.deq.fire.asUInt
+  count := countNext
+  room := countNext =/= entries.U
+  io.enq.ready := room
   io.deq.valid := full(head)
   io.deq.bits := slots(head)
   when(io.deq.fire) { full(head) := false.B; head := next(head) }
   when(io.enq.fire) { slots(tail) := io.enq.bits; full(tail) := true.B; tail := next(tail) }
-  io.count := PopCount(full)
+  io.count := count
+  assert(count === PopCount(full) && room === !full(tail), "ScanQueue: its count out of step with its slots")
   for (i <- 0 until entries) { io.held(i).valid := full(i); io.held(i).bits := slots(i) }
 }
