@@ -18,23 +18,33 @@ class ScanQueue[T <: Data](gen: T, val entries: Int) extends Module {
   val io = IO(new ScanQueueIO(gen, entries))
   private val slots = Reg(Vec(entries, gen))
   private val full = RegInit(VecInit(Seq.fill(entries)(false.B)))
-  private val ptrBits = math.max(1, log2Ceil(entries))
-  private def next(x: UInt): UInt = if (entries == 1) 0.U else Mux(x === (entries - 1).U, 0.U, x + 1.U)
-  private val head = RegInit(0.U(ptrBits.W)); private val tail = RegInit(0.U(ptrBits.W))
-  // the entries held, and whether there is room, in registers of their own: `!full(tail)` was a selection of every
-  // slot's bit by the tail (3 LUT levels at 32 entries) in front of the cache path's lookup decision and on into its
-  // tag RAMs' write enables (8 levels on xc5v, CachePath)
+  // The producer's valid is the end of a hazard check in the cache path (a line against every held one, 9 LUT levels
+  // on xc5v into the slots' write enables), so it reaches as little as it can: head and tail are one-hot, an entry's
+  // data is written into the empty tail slot whenever there is room (it is held, `full`, only when it enters), and
+  // the count, room and non-empty bits are registers whose next values are chosen by the enqueue, not computed after
+  // it. The ready is the room register (a selection of every slot's bit by the tail before).
+  private def rotate(x: UInt): UInt = if (entries == 1) x else Cat(x(entries - 2, 0), x(entries - 1))
+  private val headOH = RegInit(1.U(entries.W)); private val tailOH = RegInit(1.U(entries.W))
   private val count = RegInit(0.U(log2Ceil(entries + 1).W))
-  private val room = RegInit(true.B)
-  private val countNext = count + io.enq.fire.asUInt - io.deq.fire.asUInt
-  count := countNext
-  room := countNext =/= entries.U
+  private val room = RegInit(true.B); private val some = RegInit(false.B)
   io.enq.ready := room
-  io.deq.valid := full(head)
-  io.deq.bits := slots(head)
-  when(io.deq.fire) { full(head) := false.B; head := next(head) }
-  when(io.enq.fire) { slots(tail) := io.enq.bits; full(tail) := true.B; tail := next(tail) }
+  io.deq.valid := some
+  io.deq.bits := Mux1H(headOH, slots)
+  private val enqFire = io.enq.valid && room
+  private val deqFire = io.deq.ready && some
+  for (i <- 0 until entries) {
+    when(room && tailOH(i)) { slots(i) := io.enq.bits }
+    full(i) := Mux(enqFire && tailOH(i), true.B, Mux(deqFire && headOH(i), false.B, full(i)))
+  }
+  when(enqFire) { tailOH := rotate(tailOH) }
+  when(deqFire) { headOH := rotate(headOH) }
+  private val kept = count - deqFire.asUInt // the count if nothing enters
+  private val grown = kept + 1.U
+  count := Mux(enqFire, grown, kept)
+  room := Mux(enqFire, grown =/= entries.U, kept =/= entries.U)
+  some := Mux(enqFire, true.B, kept =/= 0.U)
   io.count := count
-  assert(count === PopCount(full) && room === !full(tail), "ScanQueue: its count out of step with its slots")
   for (i <- 0 until entries) { io.held(i).valid := full(i); io.held(i).bits := slots(i) }
+  assert(count === PopCount(full) && room === !Mux1H(tailOH, full) && some === Mux1H(headOH, full),
+    "ScanQueue: its count out of step with its slots")
 }
