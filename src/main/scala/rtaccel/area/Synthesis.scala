@@ -55,8 +55,8 @@ object Synthesis {
   def run(files: Seq[Path], top: String, family: String, cacheRoot: Path, what: String, say: String => Unit,
           rtaccelVersion: String, cachedOnly: Boolean = false): Synthesis = {
     val version = Yosys.version()
-    val dir = cacheDir(files, top, family, cacheRoot)
-    val recipe = Yosys.recipe(family, top, modules(files), Yosys.multiClockMemories(hierarchy(files, top)))
+    val recipe = recipeOf(files, top, family)
+    val dir = cacheDirOf(files, top, family, recipe, cacheRoot)
     val stat = dir.resolve(Yosys.statFile)
     val cached = Files.isRegularFile(stat)
     if (!cached && cachedOnly) throw new NotCached(s"$what for $family")
@@ -94,9 +94,13 @@ object Synthesis {
 
   /** The folder of the synthesis of `files` with `top` for `family` (the key: see `run`). */
   def cacheDir(files: Seq[Path], top: String, family: String, cacheRoot: Path): Path =
+    cacheDirOf(files, top, family, recipeOf(files, top, family), cacheRoot)
+  /** The Yosys script for `top` (it reads every memory module of the hierarchy once, to find those it inlines). */
+  private def recipeOf(files: Seq[Path], top: String, family: String): String =
+    Yosys.recipe(family, top, modules(files), Yosys.multiClockMemories(hierarchy(files, top)))
+  private def cacheDirOf(files: Seq[Path], top: String, family: String, recipe: String, cacheRoot: Path): Path =
     // the proxy's rules are part of the key: levels.json is all that is kept of the netlist
-    cacheRoot.resolve(hash(files, s"${Yosys.version()} $family $top levels v${Levels.version} dsp ${Timing.forFamily(family).dspLevels}\n" +
-      Yosys.recipe(family, top, modules(files), Yosys.multiClockMemories(hierarchy(files, top)))))
+    cacheRoot.resolve(hash(files, s"${Yosys.version()} $family $top levels v${Levels.version} dsp ${Timing.forFamily(family).dspLevels}\n" + recipe))
 
   /** How many times each module is instantiated in the design under `top` (top itself once). */
   def countInstances(mods: Map[String, Map[String, Long]], top: String): Map[String, Long] = {
