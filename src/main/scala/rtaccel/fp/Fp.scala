@@ -415,6 +415,15 @@ object Fp {
     val zeroSign = Bool()
   }
   /** addCore after aligning y: both with three extra bits (guard, round, sticky) and a carry bit on top. */
+  /** The adder's alignment in two segments (4-input LUTs): y shifted by the difference's multiple of 4, the
+    * difference's low bits and the mask of y's bits shifted out, beside the swapped operands. */
+  class AddCoarse(f: FpFormat, g: Int) extends Bundle {
+    val s = new AddSwap(f)
+    val yHi = UInt((f.manBits + 1 + g).W)
+    val dLow = UInt(2.W)
+    val lost = UInt((f.manBits + 1).W)
+  }
+
   class AddAligned(f: FpFormat) extends Bundle {
     val xSign = Bool()
     val xExp = UInt(f.expBits.W)
@@ -498,17 +507,36 @@ object Fp {
       o
     }
     // 2: align y; shifted-out bits are ORed into the LSB
-    val al = pipe.step(swSat, (if (satApart) 0 else Depth.carry(f.expBits)) + Depth.shift(dMax) + 1) { r =>
-      val dSat = if (satApart) r.d else saturate(r.d)
-      val yAligned = Cat(r.ySig, 0.U(g.W)) >> dSat
-      // the bits shifted below the sticky position, by mask: bit i of ySig is lost when i + g < dSat (one LUT per
-      // bit beside the shifter, whose low half then goes unused)
-      val yLost = (0 to m).map(i => r.ySig(i) && gtConst(dSat, i + g)).reduce(_ || _)
+    def aligned(r: AddSwap, yAligned: UInt, yLost: Bool): AddAligned = {
       val o = Wire(new AddAligned(f))
       o.xSign := r.xSign; o.xExp := r.xExp; o.effSub := r.effSub; o.toPos := r.toPos; o.sp := r.sp; o.zeroSign := r.zeroSign
       o.yExt := Cat(0.U(1.W), yAligned | yLost)
       o.xExt := Cat(0.U(1.W), r.xSig, 0.U(g.W))
       o
+    }
+    // the bits shifted below the sticky position, by mask: bit i of ySig is lost when i + g < dSat (one LUT per bit
+    // beside the shifter, whose low half then goes unused)
+    def lostMask(dSat: UInt): UInt = VecInit((0 to m).map(i => gtConst(dSat, i + g))).asUInt
+    // Where LUTs have 4 inputs the shifter is a 2:1 selection per level (5 at 27 bits) and the lost bits' mask, AND
+    // and OR tree as deep, so the shift takes two segments: by the difference's multiple of 4 with the mask decoded
+    // beside it, then by its two low bits with the lost bits' OR. In one they were 8 LUT4 levels, the exponent
+    // difference's register to the aligned significand's: WatertightPipe's routed critical path on ECP5 at 150 MHz
+    // (141.8 MHz, docs/timing.md twenty-third round). Logical right shifts compose, so the result is the same.
+    val al = if (satApart && pipe.budget.exists(_ < Depth.shift(dMax, pipe.lutInputs) + 1)) {
+      val coarse = pipe.step(swSat, (Depth.shift(dMax, pipe.lutInputs) - 2) max 2) { r =>
+        val o = Wire(new AddCoarse(f, g))
+        o.s := r
+        o.yHi := Cat(r.ySig, 0.U(g.W)) >> Cat(r.d >> 2, 0.U(2.W))
+        o.dLow := r.d(1, 0)
+        o.lost := lostMask(r.d)
+        o
+      }
+      pipe.step(coarse, 4) { r =>
+        aligned(r.s, r.yHi >> r.dLow, (r.s.ySig & r.lost).orR)
+      }
+    } else pipe.step(swSat, (if (satApart) 0 else Depth.carry(f.expBits)) + Depth.shift(dMax) + 1) { r =>
+      val dSat = if (satApart) r.d else saturate(r.d)
+      aligned(r, Cat(r.ySig, 0.U(g.W)) >> dSat, (0 to m).map(i => r.ySig(i) && gtConst(dSat, i + g)).reduce(_ || _))
     }
     // 3: add. Without underflow (fo's range holds f's) the exponent only falls by the normalising shift, never
     // below 1: its signed datapath needs to hold xExp + 1 in fo's bias, not the products' and quotients' range

@@ -172,8 +172,8 @@ object Depth {
   private def log(b: Double, n: Int): Int = math.ceil(math.log(n.toDouble max 2) / math.log(b) - 1e-9).toInt
   /** An OR (or AND) of n bits. */
   def reduce(n: Int): Int = log(6, n) max 1
-  /** A shifter by up to n places: one 4:1 mux per LUT per two shift bits. */
-  def shift(n: Int): Int = (log(2, n) + 1) / 2 max 1
+  /** A shifter by up to n places: one 4:1 mux per LUT per two shift bits; on k < 6 inputs a 2:1 mux per level. */
+  def shift(n: Int, k: Int = LutInputs): Int = if (k >= LutInputs) (log(2, n) + 1) / 2 max 1 else log(2, n) max 1
   /** An adder or comparator of n bits on a carry chain: a LUT into the chain and the chain itself. */
   def carry(n: Int): Int = 1 + n / 24
   /** A leading-zero count of n bits (a tree of 2:1 selections): two per LUT6; on k < 6 inputs one per level, log2(n)
