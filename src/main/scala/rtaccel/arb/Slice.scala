@@ -14,11 +14,15 @@ class RegSlice[T <: Data](gen: T) extends Module {
   val io = IO(new Bundle {
     val enq = Flipped(Decoupled(gen))
     val deq = Decoupled(gen)
+    /** what it holds: the output register, then the skid register (a hazard check may scan them) */
+    val held = Output(Vec(2, Valid(gen)))
   })
   private val outValid = RegInit(false.B)
   private val out = Reg(gen)
   private val skidValid = RegInit(false.B) // only while the output register is held
   private val skid = Reg(gen)
+  io.held(0).valid := outValid; io.held(0).bits := out
+  io.held(1).valid := skidValid; io.held(1).bits := skid
   io.enq.ready := !skidValid
   io.deq.valid := outValid
   io.deq.bits := out

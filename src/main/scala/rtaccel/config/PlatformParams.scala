@@ -336,10 +336,11 @@ final case class PlatformParams(
     */
   def mcResponseBuffers: Boolean = nodeCache.entries > 0 || primCache.entries > 0 || ius > 1 || memChannels > 1 || respByPath ||
     memRetries > 0 // a re-read lands in the room its first read reserved, before later reads' beats (MemoryController)
-  /** Cycles PIPELINE's slices add to a DRAM read of a path, where the MC has response buffers: one on the read, one
-    * on its beats into and one out of the buffer (a pass-through path pays them on every access, a cache on a miss).
+  /** Cycles PIPELINE's slices add to a DRAM read of a path: the AR channel's, and where the MC has response buffers
+    * one on the read, one on its beats into and one out of the buffer (a pass-through path pays them on every access,
+    * a cache on a miss).
     */
-  def passSliceCycles: Int = if (stageBudget.isDefined && mcResponseBuffers) 3 else 0
+  def passSliceCycles: Int = if (stageBudget.isEmpty) 0 else if (mcResponseBuffers) 4 else 1
   /** Cycles PIPELINE's registers in a cache path add to its hits: a lookup's decision waits a cycle before it enters
     * the queues, a data RAM read or write reaches the block RAMs a cycle after it is decided, and the head ticket waits
     * in a register (rtaccel.cache.hw.CachePath), which a tagged clean hit passes by.

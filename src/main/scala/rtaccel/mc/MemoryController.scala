@@ -390,7 +390,9 @@ class MemoryController(p: PlatformParams, axi: AxiParams,
   // the last beat's index from the slice's register: subtracted before it, after the credit compare and the
   // arbiter's choice, it made the MC's routed critical path on ECP5 (16 elements into the slice)
   memOrder.io.enq.bits.last := issue.bits.req.beats - 1.U
-  io.axi.ar <> splitter.io.ar
+  // with PIPELINE the AR channel leaves a register slice: the interconnect's ready ran through the splitter and the
+  // issue logic (7 LUT levels on xc5v from the AXI read mux of IUS > 1; PlatformParams.passSliceCycles counts it)
+  io.axi.ar <> rtaccel.arb.Slice(p, splitter.io.ar)
 
   val rBeat = RegInit(0.U(g.beatsBits.W))
   val rHead = memOrder.io.deq.bits

@@ -37,10 +37,10 @@ object CachePathFormal {
     refs = RefFormat(nodeIdBits = 8, primIndexBits = 8, countBits = 0, levelBits = 0),
     hw = HwLimits(axiAddrBits = 16, cacheTickets = 2, cacheMissQueue = 2, cacheOutQueue = 3, cacheHitQueue = 2))
   /** requests the path can hold unanswered: the lookup register (and PIPELINE's stage 2 after it), every ticket (with
-    * PIPELINE: one more in the head ticket's register), one per beat of the output queue */
+    * PIPELINE: two more in the head ticket's register slice), one per beat of the output queue */
   def maxOutstanding(p: PlatformParams): Int = {
     val sliced = p.cacheSliceCycles > 0
-    1 + (if (sliced) 1 else 0) + p.hw.cacheTickets + (if (sliced) 1 else 0) + p.hw.cacheOutQueue
+    1 + (if (sliced) 1 else 0) + p.hw.cacheTickets + (if (sliced) 2 else 0) + p.hw.cacheOutQueue
   }
 }
 

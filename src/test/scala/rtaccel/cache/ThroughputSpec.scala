@@ -34,18 +34,20 @@ class ThroughputSpec extends AnyFunSuite {
     // and each of the 3 accesses seven cycles of registers (the IU arbiter's registered grant, its slice on the winner, the IU's request slice,
     // its slice on the MC's responses and its register in front of the pipes, the MC's slice after its arbiter, the TU's
     // register on its answer); paper2017 has a node cache, so its MC has response buffers and a path slices of its own
-    // (its DRAM read, its beats into and out of the buffer): here no access is cached, three cycles more each. The
+    // (its DRAM read, its beats into and out of the buffer) beside the AR channel's slice: here no access is cached,
+    // four cycles more each. The
     // TU applies a leaf's last result a cycle after it arrives (its registered compare with tmax): one more per leaf
     val (bx, tx0) = rtaccel.iu.PipeLatencies.extraOverFixed(Presets.paper2017)
     assert(Presets.paper2017.tuLeafCycles == 1 && p.tuLeafCycles == 0)
     val tx = tx0 + 1
-    assert(bx > 0 && tx0 > 0 && Presets.paper2017.accessSliceCycles == 7 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 3)
-    assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 10)
+    assert(bx > 0 && tx0 > 0 && Presets.paper2017.accessSliceCycles == 7 && p.accessSliceCycles == 0 && Presets.paper2017.passSliceCycles == 4)
+    assert(Throughput.predict(Presets.paper2017, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 11)
     // without a cache (one cluster, one channel, request order) and without re-reads (MEM_RETRIES=0) there are no
-    // response buffers and no path slice; re-reads need the buffers
+    // response buffers and no path slice, only the AR channel's; re-reads need the buffers
     val bare = Presets.paper2017.copy(nodeCache = CacheParams(), memRetries = 0)
-    assert(bare.passSliceCycles == 0 && bare.copy(ius = 2).passSliceCycles == 3 && bare.copy(memRetries = 1).passSliceCycles == 3)
-    assert(Throughput.predict(bare, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 7)
+    assert(bare.passSliceCycles == 1 && bare.copy(ius = 2).passSliceCycles == 4 && bare.copy(memRetries = 1).passSliceCycles == 4)
+    assert(bare.copy(pipelining = rtaccel.config.Pipelining.Fixed).passSliceCycles == 0)
+    assert(Throughput.predict(bare, sink(cached = false), rays = 2, tus = 1).latencyCycles == 232.0 + 2 * bx + tx + 3 * 8)
     // TRI_II / BOX_II at the fixed stages: each node and leaf test takes its shared operators' extra cycles over the
     // pipes of a job per cycle (the latencies of the elaborated pipes, taken here apart from extraOverFixed)
     val shared = p.copy(triInterval = 2, boxInterval = 4)
@@ -67,7 +69,7 @@ class ThroughputSpec extends AnyFunSuite {
     val dec = rtaccel.iu.NodeDecode.latencyOf(q8.nodes) - rtaccel.iu.NodeDecode.FixedLatency
     assert(dec > 0)
     assert(Throughput.predict(q8, q8Sink, rays = 2, tus = 1).latencyCycles -
-      Throughput.predict(q8.copy(pipelining = rtaccel.config.Pipelining.Fixed), q8Sink, rays = 2, tus = 1).latencyCycles == 2 * (bx + dec) + tx + 3 * 7)
+      Throughput.predict(q8.copy(pipelining = rtaccel.config.Pipelining.Fixed), q8Sink, rays = 2, tus = 1).latencyCycles == 2 * (bx + dec) + tx + 3 * 8)
     // slot64 at TRI_II=2: two beats a primitive already, nothing but the pipe's latency moves
     assert(Throughput.predict(p.copy(triInterval = 2), sink(cached = false), rays = 2, tus = 1).beatCycles == u.beatCycles)
     // ray 2's nodes hit (4 beats each instead of a DRAM trip); both rays pay the cache path on 2 node accesses:

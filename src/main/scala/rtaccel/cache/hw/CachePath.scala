@@ -76,27 +76,19 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
   val ticketScan = if (tagged) Some(Module(new ScanQueue(new Ticket, tickets)).suggestName("ticketQ")) else None
   private val ticketFifo = if (tagged) None else Some(Module(new Queue(new Ticket, tickets)).suggestName("ticketQ"))
   private def ticketQ: QueueIO[Ticket] = ticketScan.fold(ticketFifo.get.io)(_.io)
-  /** the tickets the data stage serves. With PIPELINE the head ticket waits in a register, so it comes from
-    * flip-flops, not the queue's storage: in order its LUT RAM (read asynchronously into the output queue's write:
-    * the MC's routed critical path on ECP5), tagged a 32:1 selection of the ScanQueue's slots before the fill check
-    * (10 LUT levels on xc5v, the deepest path of a tagged platform). In order a hit waits a cycle more
-    * (PlatformParams.cacheSliceCycles); one ticket more is held. Tagged, the clean-hit check scans the register too
-    * (`heldTickets`), so no held fill is hidden from it.
+  /** the tickets the data stage serves. With PIPELINE the head ticket comes from a register slice of two entries
+    * (arb.RegSlice), so it comes from flip-flops, not the queue's storage: in order its LUT RAM (read asynchronously
+    * into the output queue's write: the MC's routed critical path on ECP5), tagged a 32:1 selection of the
+    * ScanQueue's slots before the fill check (10 LUT levels on xc5v, the deepest path of a tagged platform); and the
+    * queue's ready is the slice's skid bit, not the end of a beat's completion (the beat counter's compare, the
+    * DRAM beat's handshake and the head's load ran into the queue's pointers: 8 levels). In order a hit waits a cycle
+    * more (PlatformParams.cacheSliceCycles); two tickets more are held. Tagged, the clean-hit check scans the slice
+    * too (`heldTickets`), so no held fill is hidden from it.
     */
-  private val headStage: Option[(Bool, Ticket)] = Option.when(slice > 0) {
-    (RegInit(false.B), Reg(new Ticket))
-  }
-  private val ticketOut: DecoupledIO[Ticket] = headStage.fold(ticketQ.deq) { case (held, bits) =>
-    val out = Wire(Decoupled(new Ticket))
-    ticketQ.deq.ready := !held || out.ready
-    when(ticketQ.deq.ready) { held := ticketQ.deq.valid; bits := ticketQ.deq.bits }
-    out.valid := held; out.bits := bits
-    out
-  }
-  /** RESP_ORDER=tagged: every ticket the data stage has not finished, the queue's and the head register's */
-  private def heldTickets(t: ScanQueue[Ticket]): Seq[Valid[Ticket]] = t.io.held ++ headStage.map { case (held, bits) =>
-    val v = Wire(Valid(new Ticket)); v.valid := held; v.bits := bits; v
-  }
+  private val headStage: Option[rtaccel.arb.RegSlice[Ticket]] = Option.when(slice > 0)(Module(new rtaccel.arb.RegSlice(new Ticket)))
+  private val ticketOut: DecoupledIO[Ticket] = headStage.fold(ticketQ.deq) { h => h.io.enq <> ticketQ.deq; h.io.deq }
+  /** RESP_ORDER=tagged: every ticket the data stage has not finished, the queue's and the head slice's */
+  private def heldTickets(t: ScanQueue[Ticket]): Seq[Valid[Ticket]] = t.io.held ++ headStage.toSeq.flatMap(_.io.held)
   val missQ = Module(new Queue(g.memReq, hw.cacheMissQueue))
   io.memReq <> missQ.io.deq
 
@@ -330,12 +322,12 @@ class CachePath(g0: McGeometry, val cg: CacheGeometry, forwardWrites: Boolean = 
     val reads = q.io.held.map(e => e.valid && e.bits.line === head.line).reduce(_ || _)
     headStage match {
       case None => head.fill && beat === 0.U && reads
-      case Some((held, _)) =>
+      case Some(_) =>
         // PIPELINE: the check is a cycle old, so the hit queue's compares reach a register, not the response's ready
-        // (and the MC's arbitration behind it). It still holds: the head is the same ticket (the register neither
-        // loaded nor let it go), and no clean hit on its line has entered meanwhile (the clean check sees the head
+        // (and the MC's arbitration behind it). It still holds: the head is the same ticket (the slice's output
+        // register neither loaded nor let it go), and no clean hit on its line has entered meanwhile (the clean check sees the head
         // register's fill). A fill's first beat waits a cycle after its ticket reaches the head.
-        val passed = RegNext(held && !ticketOut.ready && !reads, false.B)
+        val passed = RegNext(ticketOut.valid && !ticketOut.ready && !reads, false.B)
         head.fill && beat === 0.U && !passed
     }
   }
